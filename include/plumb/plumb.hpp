@@ -1,0 +1,15 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+/// @file
+/// @brief Umbrella header: the whole public API of plumb.
+
+#include "plumb/version.hpp"
+
+#include "plumb/core/error.hpp"
+#include "plumb/core/lie.hpp"
+#include "plumb/core/point_cloud.hpp"
+#include "plumb/core/pose2.hpp"
+#include "plumb/core/rng.hpp"
+#include "plumb/core/status.hpp"
+#include "plumb/core/types.hpp"

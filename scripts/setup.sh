@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
+# Install what plumb needs with apt, only what is missing (idempotent).
+#   scripts/setup.sh            build + test dependencies
+#   scripts/setup.sh --fuzz     also clang + libFuzzer (CI's fuzz step)
+#   scripts/setup.sh --peers    also the benchmark peers: PCL, Open3D, nanoflann
+set -euo pipefail
+
+packages=(cmake g++ make libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev liblzf-dev zlib1g-dev
+          libcli11-dev nlohmann-json3-dev)
+for arg in "$@"; do
+  case "$arg" in
+    --fuzz) packages+=(clang libclang-rt-14-dev) ;;
+    --peers) packages+=(libnanoflann-dev libpcl-dev libopen3d-dev python3-open3d) ;;
+    *) echo "setup.sh: unknown option $arg" >&2; exit 2 ;;
+  esac
+done
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "setup: all dependencies present"
+  exit 0
+fi
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+echo "setup: installing ${missing[*]}"
+$SUDO apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "setup: done"

@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
+# README command 2 (and CI): install what is missing, build with -Werror, run every test, then the
+# same tests under ASan+UBSan, the find_package consumer, and each fuzzer for PLUMB_FUZZ_SECONDS (60).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+root="$(pwd)"
+jobs="$(nproc)"
+fuzz_seconds="${PLUMB_FUZZ_SECONDS:-60}"
+
+bash scripts/setup.sh --fuzz
+
+data_dir="${PLUMB_DATA_DIR:-$root/../shared/data}"
+if [ ! -f "$data_dir/SOURCES.md" ]; then
+  echo "test.sh: data directory not found at $data_dir (set PLUMB_DATA_DIR)" >&2
+  exit 1
+fi
+data_dir="$(cd "$data_dir" && pwd)"
+export PLUMB_DATA_DIR="$data_dir"
+
+step() { echo; echo "== $*"; }
+
+step "release build (-Werror), tests + benchmarks + examples"
+cmake -S . -B build/ci -DCMAKE_BUILD_TYPE=Release -DPLUMB_WERROR=ON -DPLUMB_DATA_DIR="$data_dir" \
+      -DPLUMB_BUILD_TESTS=ON -DPLUMB_BUILD_BENCH=ON -DPLUMB_BUILD_EXAMPLES=ON \
+      -DCMAKE_INSTALL_PREFIX="$root/build/ci/prefix" >/dev/null
+cmake --build build/ci -j"$jobs"
+
+step "package: install, then a consumer that does find_package(plumb)"
+rm -rf build/ci/prefix build/package
+cmake --install build/ci >/dev/null
+cmake -S tests/package -B build/package -DCMAKE_PREFIX_PATH="$root/build/ci/prefix" >/dev/null
+cmake --build build/package -j"$jobs"
+./build/package/plumb_consumer
+
+step "ASan + UBSan build, tests"
+cmake -S . -B build/asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPLUMB_SANITIZE=ON -DPLUMB_WERROR=ON \
+      -DPLUMB_DATA_DIR="$data_dir" -DPLUMB_BUILD_TESTS=ON -DPLUMB_BUILD_BENCH=OFF \
+      -DPLUMB_BUILD_EXAMPLES=ON >/dev/null
+cmake --build build/asan -j"$jobs"
+(cd build/asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+   ctest -j"$jobs" --output-on-failure --timeout 900)
+
+if [ "$fuzz_seconds" -gt 0 ]; then
+  step "fuzzers, ${fuzz_seconds} s each"
+  cmake -S . -B build/fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
+        -DPLUMB_BUILD_FUZZERS=ON -DPLUMB_BUILD_TESTS=OFF -DPLUMB_BUILD_BENCH=OFF \
+        -DPLUMB_BUILD_EXAMPLES=OFF >/dev/null
+  cmake --build build/fuzz -j"$jobs"
+  for fuzzer in build/fuzz/fuzz/plumb_*_fuzz; do
+    name="$(basename "$fuzzer")"
+    corpus="build/fuzz/corpus_$name"
+    mkdir -p "$corpus"
+    seeds="fuzz/seeds/${name#plumb_}"
+    seeds="${seeds%_fuzz}"
+    echo "-- $name"
+    "$fuzzer" -max_total_time="$fuzz_seconds" -rss_limit_mb=2048 -print_final_stats=1 \
+      "$corpus" $( [ -d "$seeds" ] && echo "$seeds" ) 2>&1 | tail -n 12
+  done
+fi
+
+step "release tests"
+cd build/ci
+ctest -j"$jobs" --output-on-failure --timeout 900
