@@ -12,4 +12,5 @@
 #include "plumb/core/pose2.hpp"
 #include "plumb/core/rng.hpp"
 #include "plumb/core/status.hpp"
+#include "plumb/core/trajectory.hpp"
 #include "plumb/core/types.hpp"
