@@ -48,6 +48,7 @@ if [ "$fuzz_seconds" -gt 0 ]; then
         -DPLUMB_BUILD_EXAMPLES=OFF >/dev/null
   cmake --build build/fuzz -j"$jobs"
   for fuzzer in build/fuzz/fuzz/plumb_*_fuzz; do
+    [ -x "$fuzzer" ] || continue
     name="$(basename "$fuzzer")"
     corpus="build/fuzz/corpus_$name"
     mkdir -p "$corpus"
