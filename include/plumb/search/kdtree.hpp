@@ -1,0 +1,152 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+/// @file
+/// @brief KdTree<Dim>: a static kd-tree over float points for exact k-nearest, nearest and radius
+/// queries (nanoflann-style: leaf buckets, sliding-midpoint splits, incremental box distances).
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <type_traits>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "plumb/core/error.hpp"
+#include "plumb/core/point_cloud.hpp"
+#include "plumb/search/neighbors.hpp"
+
+namespace plumb {
+
+/// @brief Tuning of KdTree construction.
+struct KdTreeSettings {
+  /// Maximum number of points in a leaf bucket (>= 1). Small buckets prune more, large ones make
+  /// a shallower tree and faster builds; 10 (nanoflann's default) is a good choice for 3D kNN with
+  /// k <= 20. A bucket whose points all coincide is never split, whatever its size.
+  std::size_t leaf_size = 10;
+};
+
+/// @brief Static kd-tree over `Dim`-dimensional float points (Dim = 2 or 3).
+///
+/// The finite input points are copied and reordered so that each leaf's points lie contiguously
+/// (coordinates stored per dimension); every stored point keeps its original index, and all
+/// queries report original indices into the vector (or cloud) the tree was built from.
+///
+/// Construction splits a node's points on the widest dimension of their tight bounding box at
+/// the box midpoint (both children's boxes are accumulated during the partition pass), until at
+/// most `leaf_size` points remain or all points of a node coincide. Nodes live in one vector in
+/// depth-first order. O(n log n) time, O(n) memory.
+///
+/// Non-finite points (NaN or inf in any coordinate, common in organised LiDAR frames) are skipped
+/// when building and never appear in results; size() counts only the indexed points. A tree needs
+/// at least one finite point: an empty input, or one with only non-finite points, throws
+/// plumb::Error. A query with a non-finite coordinate finds nothing (count 0 / std::nullopt).
+///
+/// All distances are squared Euclidean distances in float [m^2]. Searches are exact (no
+/// approximation factor). Among points at exactly equal distance the one that is returned is
+/// unspecified.
+/// @note The tree is immutable after construction; every query is const, keeps no shared
+///       scratch state, and may be called concurrently from any number of threads.
+template <int Dim>
+class KdTree {
+  static_assert(Dim == 2 || Dim == 3, "KdTree supports Dim = 2 and 3");
+
+ public:
+  using Point = Eigen::Matrix<float, Dim, 1>;
+
+  /// @brief Build the tree over a copy of `points`.
+  /// @throws plumb::Error when there is no finite point, when settings.leaf_size == 0, or when
+  ///         there are 2^32 or more points.
+  explicit KdTree(const std::vector<Point>& points, const KdTreeSettings& settings = {});
+
+  /// @brief Build the tree over `cloud.points` (Dim = 3 only); indices refer to the cloud.
+  template <int D = Dim, typename = std::enable_if_t<D == 3>>
+  explicit KdTree(const PointCloud& cloud, const KdTreeSettings& settings = {})
+      : KdTree(cloud.points, settings) {}
+
+  /// @brief Number of indexed (finite) points.
+  std::size_t size() const { return ids_.size(); }
+  /// @brief Number of points given to the constructor, finite or not.
+  std::size_t num_input_points() const { return num_input_points_; }
+  /// @brief Number of input points skipped because a coordinate was not finite.
+  std::size_t num_skipped() const { return num_input_points_ - ids_.size(); }
+  /// @brief Number of tree nodes (inner + leaves).
+  std::size_t num_nodes() const { return nodes_.size(); }
+  /// @brief Settings the tree was built with.
+  const KdTreeSettings& settings() const { return settings_; }
+
+  /// @brief The k nearest points, sorted by increasing distance.
+  /// @param query the query point; non-finite → no result
+  /// @param k number of neighbours wanted; more than size() yields all points
+  /// @param indices receives min(k, size()) original indices (resized to the count)
+  /// @param sq_dists receives the matching squared distances [m^2]
+  /// @return the number of neighbours found: min(k, size()), or 0 for a non-finite query
+  std::size_t knn(const Point& query, std::size_t k, std::vector<std::size_t>& indices,
+                  std::vector<float>& sq_dists) const;
+
+  /// @brief knn() into caller buffers (no allocation): `indices` and `sq_dists` must hold k values.
+  /// @return the count written, as in the vector version.
+  std::size_t knn(const Point& query, std::size_t k, std::size_t* indices, float* sq_dists) const;
+
+  /// @brief knn() returning the neighbours as values.
+  std::vector<Neighbor> knn(const Point& query, std::size_t k) const;
+
+  /// @brief The nearest point whose squared distance is <= max_dist_sq [m^2], if any.
+  /// @note A finite max_dist_sq also speeds the search up (it prunes from the start).
+  std::optional<Neighbor> nearest(const Point& query,
+                                  float max_dist_sq = std::numeric_limits<float>::infinity()) const;
+
+  /// @brief nearest() for each query; an entry without a neighbour within max_dist_sq has
+  ///        index kNoNeighbor. Serial; for threads split the queries and call nearest() per thread.
+  std::vector<Neighbor> nearest_batch(
+      const std::vector<Point>& queries,
+      float max_dist_sq = std::numeric_limits<float>::infinity()) const;
+
+  /// @brief All points within distance r [m] of the query (dist_sq <= r * r).
+  /// @param r search radius [m]; a negative or NaN r finds nothing,
+  ///        r = 0 finds points coinciding with the query, r = inf finds every point
+  /// @param sorted sort the result by increasing distance (else tree order)
+  /// @return the number of points found (the sizes of `indices` and `sq_dists`)
+  std::size_t radius(const Point& query, float r, std::vector<std::size_t>& indices,
+                     std::vector<float>& sq_dists, bool sorted = true) const;
+
+  /// @brief radius() returning the neighbours as values.
+  std::vector<Neighbor> radius(const Point& query, float r, bool sorted = true) const;
+
+ private:
+  /// One tree node, 20 bytes. The left child of an inner node is always the next node.
+  struct Node {
+    std::uint32_t a;  ///< inner: index of the right child; leaf: first point
+    std::uint32_t b;  ///< leaf: one past the last point
+    float lo;         ///< inner: largest coordinate along `dim` in the left child
+    float hi;         ///< inner: smallest coordinate along `dim` in the right child
+    std::int32_t dim; ///< split dimension, or -1 for a leaf
+  };
+
+  struct KnnSet;
+  struct RadiusSet;
+
+  void build();
+  float root_box_dist(const float* q, float* box_d) const;
+  template <typename Set>
+  void search(std::uint32_t node, const float* q, float* box_d, Set& set) const;
+  void search_nn(std::uint32_t node, const float* q, float* box_d, float& best_d,
+                 std::uint32_t& best_i) const;
+
+  KdTreeSettings settings_;
+  std::size_t num_input_points_ = 0;
+  std::vector<float> coords_;       ///< coordinates per dimension: coords_[d * size() + i]
+  std::vector<std::uint32_t> ids_;  ///< original index of stored point i
+  std::vector<Node> nodes_;         ///< depth-first; nodes_[0] is the root
+  float box_lo_[Dim] = {};          ///< bounding box of all stored points
+  float box_hi_[Dim] = {};
+};
+
+using KdTree2f = KdTree<2>;
+using KdTree3f = KdTree<3>;
+
+}  // namespace plumb
+
+#include "plumb/search/impl/kdtree_impl.hpp"
