@@ -1,0 +1,217 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "plumb/io/trajectory.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <string_view>
+#include <system_error>
+
+#include <Eigen/SVD>
+
+#include "plumb/core/error.hpp"
+
+namespace plumb::io {
+namespace {
+
+bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
+
+/// One line of a text file with its 1-based number, trimmed; comment and blank lines are skipped.
+class LineReader {
+ public:
+  explicit LineReader(const std::string& path) : path_(path), in_(path, std::ios::binary) {
+    PLUMB_CHECK(in_.is_open(), path << ": cannot open file");
+  }
+
+  /// Next data line (trimmed, not blank, not a comment); false at the end of the file.
+  bool next(std::string_view& line) {
+    while (std::getline(in_, buffer_)) {
+      ++line_number_;
+      std::string_view view(buffer_);
+      while (!view.empty() && is_space(view.front())) view.remove_prefix(1);
+      while (!view.empty() && is_space(view.back())) view.remove_suffix(1);
+      if (view.empty() || view.front() == '#') continue;
+      line = view;
+      return true;
+    }
+    PLUMB_CHECK(!in_.bad(), path_ << ": read error after line " << line_number_);
+    return false;
+  }
+
+  int line_number() const { return line_number_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  std::ifstream in_;
+  std::string buffer_;
+  int line_number_ = 0;
+};
+
+/// Split on spaces, tabs and commas and parse every field as a finite double.
+std::vector<double> parse_fields(std::string_view line, const LineReader& reader) {
+  std::vector<double> values;
+  std::size_t pos = 0;
+  while (pos < line.size()) {
+    while (pos < line.size() && (is_space(line[pos]) || line[pos] == ',')) ++pos;
+    if (pos >= line.size()) break;
+    std::size_t end = pos;
+    while (end < line.size() && !is_space(line[end]) && line[end] != ',') ++end;
+    const std::string_view token = line.substr(pos, end - pos);
+    // from_chars does not take a leading '+'; accept it as strtod would.
+    std::string_view digits = token;
+    if (digits.size() > 1 && digits.front() == '+') digits.remove_prefix(1);
+    double value = 0.0;
+    const auto [ptr, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), value);
+    PLUMB_CHECK(ec == std::errc() && ptr == digits.data() + digits.size() && std::isfinite(value),
+                reader.path() << ':' << reader.line_number() << ": field " << values.size() + 1
+                              << " is not a finite number: '" << token << "'");
+    values.push_back(value);
+    pos = end;
+  }
+  return values;
+}
+
+void check_field_count(const std::vector<double>& values, std::size_t expected, const char* format,
+                       const LineReader& reader) {
+  PLUMB_CHECK(values.size() == expected, reader.path() << ':' << reader.line_number() << ": expected "
+                                                       << expected << " fields (" << format << "), got "
+                                                       << values.size());
+}
+
+// Shortest decimal text that parses back to the same double.
+void append_double(std::string& out, double value) {
+  char buffer[32];
+  const auto [ptr, ec] = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  PLUMB_CHECK(ec == std::errc(), "write_trajectory: cannot format " << value);
+  out.append(buffer, ptr);
+}
+
+void write_text(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  PLUMB_CHECK(out.is_open(), path << ": cannot open file for writing");
+  out << text;
+  out.flush();
+  PLUMB_CHECK(out.good(), path << ": write failed");
+}
+
+}  // namespace
+
+Trajectory read_tum(const std::string& path, const TrajectoryReadSettings& settings) {
+  LineReader reader(path);
+  Trajectory trajectory;
+  std::string_view line;
+  while (reader.next(line)) {
+    const std::vector<double> v = parse_fields(line, reader);
+    check_field_count(v, 8, "stamp tx ty tz qx qy qz qw", reader);
+    Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);  // (w, x, y, z)
+    const double norm = q.norm();
+    PLUMB_CHECK(std::abs(norm - 1.0) <= settings.max_quaternion_norm_error,
+                path << ':' << reader.line_number() << ": quaternion (" << v[4] << ", " << v[5] << ", "
+                     << v[6] << ", " << v[7] << ") has norm " << norm << ", not 1 (tolerance "
+                     << settings.max_quaternion_norm_error << ")");
+    q.coeffs() /= norm;
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = q.toRotationMatrix();
+    T.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
+    trajectory.push_back(v[0], T);
+  }
+  PLUMB_CHECK(!trajectory.empty(), path << ": no poses in file (empty or only comments)");
+  return trajectory;
+}
+
+void write_tum(const Trajectory& trajectory, const std::string& path) {
+  trajectory.check_consistent("write_tum");
+  PLUMB_CHECK(trajectory.has_stamps() || trajectory.empty(),
+              "write_tum: " << path << ": the TUM format needs a stamp per pose");
+  std::string text = "# timestamp tx ty tz qx qy qz qw\n";
+  for (std::size_t i = 0; i < trajectory.size(); ++i) {
+    const Eigen::Isometry3d& T = trajectory.poses[i];
+    Eigen::Quaterniond q(T.linear());
+    q.normalize();
+    const double values[8] = {trajectory.stamps[i], T.translation().x(), T.translation().y(),
+                              T.translation().z(), q.x(), q.y(), q.z(), q.w()};
+    for (int k = 0; k < 8; ++k) {
+      if (k > 0) text += ' ';
+      append_double(text, values[k]);
+    }
+    text += '\n';
+  }
+  write_text(path, text);
+}
+
+std::vector<double> read_times(const std::string& path) {
+  LineReader reader(path);
+  std::vector<double> stamps;
+  std::string_view line;
+  while (reader.next(line)) {
+    const std::vector<double> v = parse_fields(line, reader);
+    check_field_count(v, 1, "one stamp per line", reader);
+    stamps.push_back(v[0]);
+  }
+  PLUMB_CHECK(!stamps.empty(), path << ": no stamps in file (empty or only comments)");
+  return stamps;
+}
+
+Trajectory read_kitti(const std::string& path, const std::string& times_path,
+                      const TrajectoryReadSettings& settings) {
+  LineReader reader(path);
+  Trajectory trajectory;
+  std::string_view line;
+  while (reader.next(line)) {
+    const std::vector<double> v = parse_fields(line, reader);
+    check_field_count(v, 12, "row-major 3x4 [R|t]", reader);
+    Eigen::Matrix3d R;
+    R << v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10];
+    const double error = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+    const double det = R.determinant();
+    PLUMB_CHECK(error <= settings.max_rotation_error && det > 0.0,
+                path << ':' << reader.line_number() << ": rotation block is not a rotation (max |R^T R - I| = "
+                     << error << ", tolerance " << settings.max_rotation_error << ", det " << det << ")");
+    if (settings.orthonormalize && error > 0.0) {
+      // Nearest rotation in the Frobenius norm: U V^T (det > 0 is guaranteed by the check above
+      // for such small errors).
+      const Eigen::JacobiSVD<Eigen::Matrix3d> svd(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
+      R = svd.matrixU() * svd.matrixV().transpose();
+    }
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = R;
+    T.translation() = Eigen::Vector3d(v[3], v[7], v[11]);
+    trajectory.poses.push_back(T);
+  }
+  PLUMB_CHECK(!trajectory.empty(), path << ": no poses in file (empty or only comments)");
+  if (!times_path.empty()) {
+    trajectory.stamps = read_times(times_path);
+    PLUMB_CHECK(trajectory.stamps.size() == trajectory.poses.size(),
+                times_path << ": " << trajectory.stamps.size() << " stamps for the " << trajectory.poses.size()
+                           << " poses of " << path);
+  }
+  return trajectory;
+}
+
+void write_kitti(const Trajectory& trajectory, const std::string& path, const std::string& times_path) {
+  trajectory.check_consistent("write_kitti");
+  std::string text;
+  for (const Eigen::Isometry3d& T : trajectory.poses) {
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 4; ++c) {
+        if (r > 0 || c > 0) text += ' ';
+        append_double(text, T.matrix()(r, c));
+      }
+    }
+    text += '\n';
+  }
+  if (!times_path.empty()) {
+    PLUMB_CHECK(trajectory.has_stamps() || trajectory.empty(),
+                "write_kitti: " << times_path << ": the trajectory has no stamps to write");
+    std::string times;
+    for (double stamp : trajectory.stamps) {
+      append_double(times, stamp);
+      times += '\n';
+    }
+    write_text(times_path, times);
+  }
+  write_text(path, text);
+}
+
+}  // namespace plumb::io
