@@ -1,0 +1,306 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+// Bodies of plumb/filters/voxel_grid.hpp (included at its end).
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "plumb/core/error.hpp"
+#include "plumb/core/point_cloud.hpp"
+#include "plumb/core/status.hpp"
+
+namespace plumb {
+namespace detail {
+
+/// Number of bits needed to write v (0 for v == 0).
+inline int bit_width_u64(std::uint64_t v) {
+  int bits = 0;
+  while (v != 0) {
+    ++bits;
+    v >>= 1;
+  }
+  return bits;
+}
+
+inline VoxelKeyLayout make_voxel_key_layout(const Vector3d& min, const Vector3d& max,
+                                            double leaf_size) {
+  VoxelKeyLayout layout;
+  layout.origin = min;
+  layout.leaf_size = leaf_size;
+  constexpr std::uint64_t kMax = std::numeric_limits<std::uint64_t>::max();
+  // 2^64 as a double; a per-axis count at or above it cannot even be converted.
+  constexpr double kTwoPow64 = 18446744073709551616.0;
+  bool fits = true;
+  for (int a = 0; a < 3; ++a) {
+    // Largest coordinate is floor((max - min) / leaf), the same expression the points use, so
+    // every point's coordinate is <= n - 1 (division and subtraction are monotonic).
+    const double top = std::floor((max[a] - min[a]) / leaf_size);
+    if (!(top < kTwoPow64 - 1.0)) {
+      fits = false;
+      break;
+    }
+    layout.n[a] = static_cast<std::uint64_t>(top) + 1;
+  }
+  // n_x * n_y * n_z must not exceed 2^64, i.e. the largest key n_x*n_y*n_z - 1 must fit.
+  if (fits && layout.n[1] > kMax / layout.n[0]) fits = false;
+  if (fits) {
+    const std::uint64_t nxy = layout.n[0] * layout.n[1];
+    // nxy * nz - 1 <= kMax  <=>  nz - 1 <= (kMax - (nxy - 1)) / nxy
+    if ((layout.n[2] - 1) > (kMax - (nxy - 1)) / nxy) fits = false;
+  }
+  PLUMB_CHECK(fits, "voxel_grid: leaf_size " << leaf_size << " m is too small for the cloud's extent "
+                                             << (max[0] - min[0]) << " x " << (max[1] - min[1])
+                                             << " x " << (max[2] - min[2])
+                                             << " m: the voxel counts per axis multiply to more than "
+                                                "2^64 and do not fit a 64-bit voxel key; use a "
+                                                "larger leaf or crop the cloud first");
+  layout.stride_y = layout.n[0];
+  layout.stride_z = layout.n[0] * layout.n[1];
+  const std::uint64_t max_key = (layout.n[0] - 1) + layout.stride_y * (layout.n[1] - 1) +
+                                layout.stride_z * (layout.n[2] - 1);
+  layout.key_bits = bit_width_u64(max_key);
+  return layout;
+}
+
+/// Voxel key of a finite point inside the layout's bounds.
+inline std::uint64_t voxel_key(const VoxelKeyLayout& layout, const Vector3f& p) {
+  const double ix = std::floor((static_cast<double>(p[0]) - layout.origin[0]) / layout.leaf_size);
+  const double iy = std::floor((static_cast<double>(p[1]) - layout.origin[1]) / layout.leaf_size);
+  const double iz = std::floor((static_cast<double>(p[2]) - layout.origin[2]) / layout.leaf_size);
+  return static_cast<std::uint64_t>(ix) + layout.stride_y * static_cast<std::uint64_t>(iy) +
+         layout.stride_z * static_cast<std::uint64_t>(iz);
+}
+
+/// Stable LSD radix sort of `a` by the low `key_bits` bits of key_of(element); `tmp` is scratch.
+/// Digits of at most 11 bits (a 2048-entry histogram stays in L1); passes whose digit is the same
+/// for every element are skipped.
+template <typename T, typename KeyOf>
+void radix_sort_by_key(std::vector<T>& a, std::vector<T>& tmp, int key_bits, KeyOf key_of) {
+  const std::size_t n = a.size();
+  if (n < 2 || key_bits <= 0) return;
+  const int num_passes = (key_bits + 10) / 11;
+  const int digit_bits = (key_bits + num_passes - 1) / num_passes;
+  const std::size_t num_buckets = std::size_t{1} << digit_bits;
+  const std::uint64_t mask = num_buckets - 1;
+  std::vector<std::size_t> hist(num_buckets * static_cast<std::size_t>(num_passes), 0);
+  for (const T& x : a) {
+    const std::uint64_t k = key_of(x);
+    for (int pass = 0; pass < num_passes; ++pass) {
+      ++hist[static_cast<std::size_t>(pass) * num_buckets +
+             static_cast<std::size_t>((k >> (pass * digit_bits)) & mask)];
+    }
+  }
+  tmp.resize(n);
+  for (int pass = 0; pass < num_passes; ++pass) {
+    std::size_t* h = hist.data() + static_cast<std::size_t>(pass) * num_buckets;
+    const int shift = pass * digit_bits;
+    if (h[static_cast<std::size_t>((key_of(a[0]) >> shift) & mask)] == n) continue;  // one bucket
+    std::size_t sum = 0;
+    for (std::size_t b = 0; b < num_buckets; ++b) {
+      const std::size_t c = h[b];
+      h[b] = sum;
+      sum += c;
+    }
+    for (const T& x : a) tmp[h[static_cast<std::size_t>((key_of(x) >> shift) & mask)]++] = x;
+    a.swap(tmp);
+  }
+}
+
+/// (key, source index) of a point when the two do not fit one 64-bit word together.
+struct VoxelKeyIndex {
+  std::uint64_t key;
+  std::size_t index;
+};
+
+/// One linear pass over runs of equal keys in `sorted` (ascending keys, ascending source index
+/// within a run): centroids in double, then the nearest point or the averaged fields.
+template <typename T, typename KeyOf, typename IndexOf>
+void reduce_voxel_runs(const PointCloud& cloud, const std::vector<T>& sorted, KeyOf key_of,
+                       IndexOf index_of, const VoxelGridSettings& settings,
+                       VoxelGridResult& result) {
+  const std::vector<Vector3f>& pts = cloud.points;
+  const std::size_t n = sorted.size();
+  const bool nearest_mode = settings.mode == VoxelMode::kNearestToCentroid;
+  PointCloud& out = result.cloud;
+
+  // Index of the point nearest to centroid c in run [b, e); ties keep the first (lowest index).
+  auto nearest_in_run = [&](std::size_t b, std::size_t e, const Vector3d& c) {
+    std::size_t best = index_of(sorted[b]);
+    double best_d_sq = (pts[best].template cast<double>() - c).squaredNorm();
+    for (std::size_t j = b + 1; j < e; ++j) {
+      const std::size_t i = index_of(sorted[j]);
+      const double d_sq = (pts[i].template cast<double>() - c).squaredNorm();
+      if (d_sq < best_d_sq) {
+        best_d_sq = d_sq;
+        best = i;
+      }
+    }
+    return best;
+  };
+
+  if (!nearest_mode) {
+    if (cloud.has_normals()) out.normals.reserve(n / 4);
+    if (cloud.has_intensities()) out.intensities.reserve(n / 4);
+    if (cloud.has_rings()) out.rings.reserve(n / 4);
+    if (cloud.has_times()) out.times.reserve(n / 4);
+    if (cloud.has_labels()) out.labels.reserve(n / 4);
+  }
+  std::vector<std::size_t>& kept = result.indices;
+  std::size_t b = 0;
+  while (b < n) {
+    const std::uint64_t key = key_of(sorted[b]);
+    std::size_t e = b + 1;
+    Vector3d sum = pts[index_of(sorted[b])].template cast<double>();
+    while (e < n && key_of(sorted[e]) == key) {
+      sum += pts[index_of(sorted[e])].template cast<double>();
+      ++e;
+    }
+    ++result.num_voxels;
+    const std::size_t count = e - b;
+    if (count < settings.min_points_per_voxel) {
+      ++result.num_sparse_voxels;
+      b = e;
+      continue;
+    }
+    if (count == 1) {  // the point is its own centroid
+      const std::size_t i = index_of(sorted[b]);
+      if (nearest_mode) {
+        kept.push_back(i);
+      } else {
+        out.points.push_back(pts[i]);
+        if (cloud.has_normals()) out.normals.push_back(cloud.normals[i]);
+        if (cloud.has_intensities()) out.intensities.push_back(cloud.intensities[i]);
+        if (cloud.has_rings()) out.rings.push_back(cloud.rings[i]);
+        if (cloud.has_times()) out.times.push_back(cloud.times[i]);
+        if (cloud.has_labels()) out.labels.push_back(cloud.labels[i]);
+      }
+      b = e;
+      continue;
+    }
+    const double inv_count = 1.0 / static_cast<double>(count);
+    const Vector3d centroid = sum * inv_count;
+    if (nearest_mode) {
+      kept.push_back(nearest_in_run(b, e, centroid));
+      b = e;
+      continue;
+    }
+    // kCentroid.
+    out.points.push_back(centroid.cast<float>());
+    std::size_t nearest = std::numeric_limits<std::size_t>::max();
+    auto get_nearest = [&]() {
+      if (nearest == std::numeric_limits<std::size_t>::max()) nearest = nearest_in_run(b, e, centroid);
+      return nearest;
+    };
+    if (cloud.has_normals()) {
+      Vector3d nsum = Vector3d::Zero();
+      for (std::size_t j = b; j < e; ++j) nsum += cloud.normals[index_of(sorted[j])].template cast<double>();
+      const double len = nsum.norm() * inv_count;
+      if (len > 1e-6) {
+        out.normals.push_back((nsum / nsum.norm()).cast<float>());
+      } else {  // normals cancel out (or are not finite): keep the nearest point's
+        out.normals.push_back(cloud.normals[get_nearest()]);
+      }
+    }
+    auto mean_of = [&](const std::vector<float>& field) {
+      double s = 0.0;
+      for (std::size_t j = b; j < e; ++j) s += static_cast<double>(field[index_of(sorted[j])]);
+      return static_cast<float>(s * inv_count);
+    };
+    if (cloud.has_intensities()) out.intensities.push_back(mean_of(cloud.intensities));
+    if (cloud.has_rings()) out.rings.push_back(cloud.rings[get_nearest()]);
+    if (cloud.has_times()) out.times.push_back(mean_of(cloud.times));
+    if (cloud.has_labels()) out.labels.push_back(cloud.labels[get_nearest()]);
+    b = e;
+  }
+
+  if (nearest_mode) {
+    // Copy every field of the kept points (indices are valid by construction).
+    const std::size_t m = kept.size();
+    out.points.resize(m);
+    for (std::size_t k = 0; k < m; ++k) out.points[k] = pts[kept[k]];
+    auto copy = [&](const auto& src, auto& dst) {
+      if (src.empty()) return;
+      dst.resize(m);
+      for (std::size_t k = 0; k < m; ++k) dst[k] = src[kept[k]];
+    };
+    copy(cloud.normals, out.normals);
+    copy(cloud.intensities, out.intensities);
+    copy(cloud.rings, out.rings);
+    copy(cloud.times, out.times);
+    copy(cloud.labels, out.labels);
+  }
+}
+
+}  // namespace detail
+
+inline VoxelGridResult voxel_grid(const PointCloud& cloud, const VoxelGridSettings& settings) {
+  const double leaf = settings.leaf_size;
+  PLUMB_CHECK(std::isfinite(leaf) && leaf > 0.0,
+              "voxel_grid: leaf_size must be finite and > 0, got " << leaf << " m");
+  PLUMB_CHECK(settings.min_points_per_voxel >= 1, "voxel_grid: min_points_per_voxel must be >= 1");
+  cloud.check_consistent("voxel_grid");
+
+  VoxelGridResult result;
+  const std::vector<Vector3f>& pts = cloud.points;
+  const std::size_t n = pts.size();
+
+  // Pass 1: bounding box of the finite points (float min/max are exact).
+  Vector3f lo = Vector3f::Constant(std::numeric_limits<float>::infinity());
+  Vector3f hi = -lo;
+  std::size_t num_finite = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vector3f& p = pts[i];
+    if (!p.allFinite()) continue;
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+    ++num_finite;
+  }
+  result.num_dropped_non_finite = n - num_finite;
+  if (num_finite == 0) {
+    result.status = Status::kInsufficientData;
+    return result;
+  }
+  const detail::VoxelKeyLayout layout =
+      detail::make_voxel_key_layout(lo.cast<double>(), hi.cast<double>(), leaf);
+
+  // Pass 2: keys, then a stable radix sort (keeps source order inside a voxel).
+  const int index_bits = detail::bit_width_u64(static_cast<std::uint64_t>(n - 1));
+  if (layout.key_bits + index_bits <= 64) {
+    // Packed: key in the high bits, source index in the low bits of one word.
+    std::vector<std::uint64_t> items;
+    items.reserve(num_finite);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!pts[i].allFinite()) continue;
+      items.push_back((detail::voxel_key(layout, pts[i]) << index_bits) |
+                      static_cast<std::uint64_t>(i));
+    }
+    std::vector<std::uint64_t> tmp;
+    auto key_of = [index_bits](std::uint64_t x) { return x >> index_bits; };
+    const std::uint64_t index_mask =
+        index_bits == 0 ? 0 : (~std::uint64_t{0} >> (64 - index_bits));
+    auto index_of = [index_mask](std::uint64_t x) { return static_cast<std::size_t>(x & index_mask); };
+    detail::radix_sort_by_key(items, tmp, layout.key_bits, key_of);
+    detail::reduce_voxel_runs(cloud, items, key_of, index_of, settings, result);
+  } else {
+    std::vector<detail::VoxelKeyIndex> items;
+    items.reserve(num_finite);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!pts[i].allFinite()) continue;
+      items.push_back({detail::voxel_key(layout, pts[i]), i});
+    }
+    std::vector<detail::VoxelKeyIndex> tmp;
+    auto key_of = [](const detail::VoxelKeyIndex& x) { return x.key; };
+    auto index_of = [](const detail::VoxelKeyIndex& x) { return x.index; };
+    detail::radix_sort_by_key(items, tmp, layout.key_bits, key_of);
+    detail::reduce_voxel_runs(cloud, items, key_of, index_of, settings, result);
+  }
+  result.status = result.cloud.empty() ? Status::kInsufficientData : Status::kOk;
+  return result;
+}
+
+}  // namespace plumb
