@@ -1,0 +1,170 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+/// @file
+/// @brief Private helpers shared by the point-cloud readers and writers (PCD, PLY, KITTI .bin):
+///        whole-file slurp and write, a bounded text cursor, number parsing and checked
+///        conversions. Not installed; not part of the API.
+
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <vector>
+
+#include "plumb/core/error.hpp"
+
+namespace plumb::io::cloud_detail {
+
+/// Read a whole file into memory with one read. Throws plumb::Error naming the path.
+inline std::vector<char> slurp_file(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr) PLUMB_THROW(path << ": cannot open for reading: " << std::strerror(errno));
+  std::vector<char> data;
+  if (std::fseek(f, 0, SEEK_END) == 0) {
+    const long size = std::ftell(f);
+    if (size > 0) data.reserve(static_cast<std::size_t>(size));
+    std::fseek(f, 0, SEEK_SET);
+  }
+  char chunk[1 << 16];
+  std::size_t got = 0;
+  while ((got = std::fread(chunk, 1, sizeof(chunk), f)) > 0) data.insert(data.end(), chunk, chunk + got);
+  const bool failed = std::ferror(f) != 0;
+  std::fclose(f);
+  if (failed) PLUMB_THROW(path << ": read error");
+  return data;
+}
+
+/// Write a whole buffer to a file (created or truncated). Throws plumb::Error naming the path.
+inline void write_file(const std::string& path, const char* data, std::size_t size) {
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  if (f == nullptr) PLUMB_THROW(path << ": cannot open for writing: " << std::strerror(errno));
+  const std::size_t written = size == 0 ? 0 : std::fwrite(data, 1, size, f);
+  const bool close_failed = std::fclose(f) != 0;
+  if (written != size || close_failed) PLUMB_THROW(path << ": write failed");
+}
+
+/// Line-oriented cursor over a text (or header) region; tolerates CRLF.
+struct LineCursor {
+  const char* begin = nullptr;  ///< start of the whole buffer (for byte offsets)
+  const char* pos = nullptr;
+  const char* end = nullptr;
+  std::size_t line = 0;  ///< 1-based number of the line last returned by next()
+
+  /// Next line without its terminator ("\n" or "\r\n"); false at end of buffer.
+  bool next(std::string_view& out) {
+    if (pos >= end) return false;
+    const char* nl = static_cast<const char*>(std::memchr(pos, '\n', static_cast<std::size_t>(end - pos)));
+    const char* stop = nl != nullptr ? nl : end;
+    const char* trimmed = stop;
+    if (trimmed > pos && trimmed[-1] == '\r') --trimmed;
+    out = std::string_view(pos, static_cast<std::size_t>(trimmed - pos));
+    pos = nl != nullptr ? nl + 1 : end;
+    ++line;
+    return true;
+  }
+  std::size_t offset() const { return static_cast<std::size_t>(pos - begin); }
+};
+
+inline bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f'; }
+
+/// Split a line into whitespace-separated tokens.
+inline std::vector<std::string_view> split_tokens(std::string_view line) {
+  std::vector<std::string_view> out;
+  std::size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && is_space(line[i])) ++i;
+    const std::size_t start = i;
+    while (i < line.size() && !is_space(line[i])) ++i;
+    if (i > start) out.push_back(line.substr(start, i - start));
+  }
+  return out;
+}
+
+/// Next whitespace-separated token of `line` starting at `i` (advanced); empty at end.
+inline std::string_view next_token(std::string_view line, std::size_t& i) {
+  while (i < line.size() && is_space(line[i])) ++i;
+  const std::size_t start = i;
+  while (i < line.size() && !is_space(line[i])) ++i;
+  return line.substr(start, i - start);
+}
+
+/// Parse a whole token as T (integer or floating point); false when it is not exactly a number.
+/// Accepts a leading '+' and, for floating point, nan / inf in any case.
+template <class T>
+bool parse_number(std::string_view tok, T& out) {
+  if (!tok.empty() && tok.front() == '+') tok.remove_prefix(1);
+  if (tok.empty()) return false;
+  const char* first = tok.data();
+  const char* last = tok.data() + tok.size();
+  if constexpr (std::is_floating_point_v<T>) {
+    auto [ptr, ec] = std::from_chars(first, last, out, std::chars_format::general);
+    if (ec == std::errc::result_out_of_range && ptr == last) {
+      // from_chars leaves out untouched on over/underflow; keep what a C reader would give.
+      out = static_cast<T>(std::strtod(std::string(tok).c_str(), nullptr));
+      return true;
+    }
+    return ec == std::errc() && ptr == last;
+  } else {
+    auto [ptr, ec] = std::from_chars(first, last, out);
+    return ec == std::errc() && ptr == last;
+  }
+}
+
+/// Little-endian scalar load from unaligned memory (hosts here are little endian).
+template <class T>
+inline T load(const char* p) {
+  T v;
+  std::memcpy(&v, p, sizeof(T));
+  return v;
+}
+
+/// Byte-swapped scalar load (big-endian files).
+template <class T>
+inline T load_swapped(const char* p) {
+  char tmp[sizeof(T)];
+  for (std::size_t k = 0; k < sizeof(T); ++k) tmp[k] = p[sizeof(T) - 1 - k];
+  return load<T>(tmp);
+}
+
+/// Convert a source value into a destination field type. Floating destinations take any value
+/// (IEEE casts); integer destinations must be finite and in range, else false.
+template <class Dst, class Src>
+inline bool convert_value(Src v, Dst& out) {
+  if constexpr (std::is_floating_point_v<Dst>) {
+    out = static_cast<Dst>(v);
+    return true;
+  } else if constexpr (std::is_floating_point_v<Src>) {
+    // [min, 2^digits) with both ends exactly representable, so the cast below is defined.
+    const Src lo = static_cast<Src>(std::numeric_limits<Dst>::min());
+    const Src hi = std::ldexp(Src(1), std::numeric_limits<Dst>::digits);
+    if (!(v >= lo && v < hi) || v != std::trunc(v)) return false;
+    out = static_cast<Dst>(v);
+    return true;
+  } else if constexpr (std::is_signed_v<Src>) {
+    const long long x = static_cast<long long>(v);
+    if constexpr (std::is_signed_v<Dst>) {
+      if (x < static_cast<long long>(std::numeric_limits<Dst>::min()) ||
+          x > static_cast<long long>(std::numeric_limits<Dst>::max())) {
+        return false;
+      }
+    } else {
+      if (x < 0 || static_cast<unsigned long long>(x) > std::numeric_limits<Dst>::max()) return false;
+    }
+    out = static_cast<Dst>(v);
+    return true;
+  } else {
+    const unsigned long long x = static_cast<unsigned long long>(v);
+    if (x > static_cast<unsigned long long>(std::numeric_limits<Dst>::max())) return false;
+    out = static_cast<Dst>(v);
+    return true;
+  }
+}
+
+}  // namespace plumb::io::cloud_detail

@@ -1,0 +1,657 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "plumb/io/pcd.hpp"
+
+#include <lzf.h>
+
+#include <array>
+#include <charconv>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "detail_cloud_io.hpp"
+
+namespace plumb::io {
+namespace {
+
+using cloud_detail::convert_value;
+using cloud_detail::LineCursor;
+using cloud_detail::load;
+using cloud_detail::parse_number;
+using cloud_detail::split_tokens;
+
+// Upper bound on COUNT per field; keeps record sizes far from overflow. Real files use <= 308 (FPFH
+// histograms are 33, VFH 308).
+constexpr std::uint64_t kMaxCount = std::uint64_t{1} << 24;
+// LZF cannot expand a stream by more than ~88x (3 input bytes yield at most 264 output bytes).
+constexpr std::uint64_t kMaxLzfRatio = 100;
+
+static_assert(sizeof(Vector3f) == 3 * sizeof(float), "points are decoded as strided float arrays");
+
+enum class Role { kNone, kX, kY, kZ, kNormalX, kNormalY, kNormalZ, kIntensity, kRing, kTime, kLabel };
+constexpr int kNumRoles = 11;
+
+enum class DataKind { kAscii, kBinary, kBinaryCompressed };
+
+struct Field {
+  std::string name;
+  int size = 0;             // bytes per value
+  char type = 0;            // 'F', 'U' or 'I'
+  std::uint64_t count = 1;  // values per point
+  Role role = Role::kNone;
+  std::uint64_t offset = 0;  // byte offset of the field inside one interleaved record
+};
+
+struct Header {
+  std::vector<Field> fields;
+  std::uint64_t num_points = 0;
+  std::uint64_t point_size = 0;  // bytes of one record
+  DataKind kind = DataKind::kAscii;
+  std::size_t data_offset = 0;  // byte offset of the first data byte
+  std::size_t data_line = 0;    // number of the DATA line
+  std::array<int, kNumRoles> field_of_role{};  // index into fields, or -1
+};
+
+Role role_of(std::string_view name) {
+  if (name == "x") return Role::kX;
+  if (name == "y") return Role::kY;
+  if (name == "z") return Role::kZ;
+  if (name == "normal_x") return Role::kNormalX;
+  if (name == "normal_y") return Role::kNormalY;
+  if (name == "normal_z") return Role::kNormalZ;
+  if (name == "intensity") return Role::kIntensity;
+  if (name == "ring") return Role::kRing;
+  if (name == "time") return Role::kTime;
+  if (name == "label") return Role::kLabel;
+  return Role::kNone;
+}
+
+bool valid_type_size(char type, int size) {
+  if (type == 'F') return size == 4 || size == 8;
+  if (type == 'U' || type == 'I') return size == 1 || size == 2 || size == 4 || size == 8;
+  return false;
+}
+
+std::uint64_t parse_header_uint(std::string_view tok, const std::string& name, std::size_t line,
+                                std::string_view key) {
+  std::uint64_t v = 0;
+  if (!parse_number(tok, v)) {
+    PLUMB_THROW(name << ":" << line << ": " << key << " expects a non-negative integer, got '" << tok << "'");
+  }
+  return v;
+}
+
+Header parse_header(const char* data, std::size_t size, const std::string& name) {
+  Header h;
+  LineCursor cur{data, data, data + size, 0};
+  std::vector<std::string_view> names, sizes, types, counts;
+  std::size_t fields_line = 0, size_line = 0, type_line = 0, count_line = 0;
+  bool have_width = false, have_height = false, have_points = false, have_data = false;
+  std::uint64_t width = 0, height = 1, points = 0;
+  std::size_t width_line = 0, points_line = 0;
+  std::string_view line;
+  while (cur.next(line)) {
+    const auto tokens = split_tokens(line);
+    if (tokens.empty() || tokens[0].front() == '#') continue;
+    const std::string_view key = tokens[0];
+    auto expect_one = [&]() {
+      if (tokens.size() != 2) {
+        PLUMB_THROW(name << ":" << cur.line << ": " << key << " expects one value, got " << tokens.size() - 1);
+      }
+    };
+    if (key == "VERSION") {
+      // .5, 0.6, 0.7: the layout read here is the same.
+    } else if (key == "FIELDS" || key == "COLUMNS") {
+      names.assign(tokens.begin() + 1, tokens.end());
+      fields_line = cur.line;
+    } else if (key == "SIZE") {
+      sizes.assign(tokens.begin() + 1, tokens.end());
+      size_line = cur.line;
+    } else if (key == "TYPE") {
+      types.assign(tokens.begin() + 1, tokens.end());
+      type_line = cur.line;
+    } else if (key == "COUNT") {
+      counts.assign(tokens.begin() + 1, tokens.end());
+      count_line = cur.line;
+    } else if (key == "WIDTH") {
+      expect_one();
+      width = parse_header_uint(tokens[1], name, cur.line, key);
+      have_width = true;
+      width_line = cur.line;
+    } else if (key == "HEIGHT") {
+      expect_one();
+      height = parse_header_uint(tokens[1], name, cur.line, key);
+      have_height = true;
+    } else if (key == "POINTS") {
+      expect_one();
+      points = parse_header_uint(tokens[1], name, cur.line, key);
+      have_points = true;
+      points_line = cur.line;
+    } else if (key == "VIEWPOINT") {
+      // Sensor pose; not kept (the cloud is in its own frame).
+    } else if (key == "DATA") {
+      expect_one();
+      if (tokens[1] == "ascii") {
+        h.kind = DataKind::kAscii;
+      } else if (tokens[1] == "binary") {
+        h.kind = DataKind::kBinary;
+      } else if (tokens[1] == "binary_compressed") {
+        h.kind = DataKind::kBinaryCompressed;
+      } else {
+        PLUMB_THROW(name << ":" << cur.line << ": unknown DATA kind '" << tokens[1]
+                         << "' (expected ascii, binary or binary_compressed)");
+      }
+      h.data_offset = cur.offset();
+      h.data_line = cur.line;
+      have_data = true;
+      break;
+    } else {
+      PLUMB_THROW(name << ":" << cur.line << ": unknown PCD header keyword '" << key << "'");
+    }
+  }
+  if (!have_data) {
+    PLUMB_THROW(name << ":" << cur.line << ": not a PCD file or truncated header (no DATA line)");
+  }
+  const std::size_t dl = h.data_line;
+  if (names.empty()) PLUMB_THROW(name << ":" << dl << ": header has no FIELDS");
+  if (sizes.size() != names.size()) {
+    PLUMB_THROW(name << ":" << (size_line ? size_line : dl) << ": SIZE has " << sizes.size() << " entries for "
+                     << names.size() << " FIELDS");
+  }
+  if (types.size() != names.size()) {
+    PLUMB_THROW(name << ":" << (type_line ? type_line : dl) << ": TYPE has " << types.size() << " entries for "
+                     << names.size() << " FIELDS");
+  }
+  if (!counts.empty() && counts.size() != names.size()) {
+    PLUMB_THROW(name << ":" << count_line << ": COUNT has " << counts.size() << " entries for " << names.size()
+                     << " FIELDS");
+  }
+
+  h.field_of_role.fill(-1);
+  std::uint64_t offset = 0;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    Field f;
+    f.name = std::string(names[i]);
+    const std::uint64_t s = parse_header_uint(sizes[i], name, size_line, "SIZE");
+    if (types[i].size() != 1 || !valid_type_size(types[i][0], static_cast<int>(s > 8 ? 0 : s))) {
+      PLUMB_THROW(name << ":" << type_line << ": field '" << f.name << "' has unsupported TYPE " << types[i]
+                       << " with SIZE " << sizes[i]);
+    }
+    f.size = static_cast<int>(s);
+    f.type = types[i][0];
+    if (!counts.empty()) {
+      f.count = parse_header_uint(counts[i], name, count_line, "COUNT");
+      if (f.count == 0 || f.count > kMaxCount) {
+        PLUMB_THROW(name << ":" << count_line << ": field '" << f.name << "' has COUNT " << f.count
+                         << " (expected 1.." << kMaxCount << ")");
+      }
+    }
+    f.offset = offset;
+    offset += static_cast<std::uint64_t>(f.size) * f.count;
+    f.role = role_of(f.name);
+    if (f.role != Role::kNone) {
+      int& slot = h.field_of_role[static_cast<int>(f.role)];
+      if (slot >= 0) PLUMB_THROW(name << ":" << fields_line << ": field '" << f.name << "' appears twice");
+      if (f.count != 1) {
+        PLUMB_THROW(name << ":" << count_line << ": field '" << f.name << "' must have COUNT 1, has " << f.count);
+      }
+      slot = static_cast<int>(i);
+    }
+    h.fields.push_back(std::move(f));
+  }
+  h.point_size = offset;
+  for (Role r : {Role::kX, Role::kY, Role::kZ}) {
+    if (h.field_of_role[static_cast<int>(r)] < 0) {
+      PLUMB_THROW(name << ":" << fields_line << ": FIELDS lacks x, y or z");
+    }
+  }
+  // Normals only as a complete triple; a lone normal_x is treated as an unknown field.
+  const int nx = h.field_of_role[static_cast<int>(Role::kNormalX)];
+  const int ny = h.field_of_role[static_cast<int>(Role::kNormalY)];
+  const int nz = h.field_of_role[static_cast<int>(Role::kNormalZ)];
+  if (nx < 0 || ny < 0 || nz < 0) {
+    for (int idx : {nx, ny, nz}) {
+      if (idx >= 0) h.fields[static_cast<std::size_t>(idx)].role = Role::kNone;
+    }
+    h.field_of_role[static_cast<int>(Role::kNormalX)] = -1;
+    h.field_of_role[static_cast<int>(Role::kNormalY)] = -1;
+    h.field_of_role[static_cast<int>(Role::kNormalZ)] = -1;
+  }
+
+  if (!have_width && !have_points) PLUMB_THROW(name << ":" << dl << ": header has neither WIDTH nor POINTS");
+  if (!have_width) {
+    width = points;
+    height = 1;
+  }
+  (void)have_height;
+  if (height != 0 && width > std::numeric_limits<std::uint64_t>::max() / height) {
+    PLUMB_THROW(name << ":" << width_line << ": WIDTH " << width << " x HEIGHT " << height << " overflows");
+  }
+  const std::uint64_t wh = width * height;
+  if (have_points && points != wh) {
+    PLUMB_THROW(name << ":" << points_line << ": POINTS " << points << " does not match WIDTH x HEIGHT = " << width
+                     << " x " << height << " = " << wh);
+  }
+  h.num_points = wh;
+  return h;
+}
+
+// Where decoded values of one role go: a strided array of Dst.
+template <class Dst>
+struct Sink {
+  Dst* out = nullptr;
+  std::size_t stride = 1;
+};
+
+[[noreturn]] void throw_bad_value(const std::string& name, const Field& f, std::size_t byte, const char* where) {
+  PLUMB_THROW(name << ": byte " << byte << where << ": value of field '" << f.name
+                   << "' is not an integer in the range of its destination");
+}
+
+// Decode one field for n points: value i sits at base + i * stride. `base_offset` is the byte
+// offset of `base` for messages.
+template <class Src, class Dst>
+void decode_column_typed(const char* base, std::size_t stride, std::size_t n, Sink<Dst> sink,
+                         const std::string& name, const Field& f, std::size_t base_offset, const char* where) {
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!convert_value(load<Src>(base + i * stride), sink.out[i * sink.stride])) {
+      throw_bad_value(name, f, base_offset + i * stride, where);
+    }
+  }
+}
+
+template <class Dst>
+void decode_column(const char* base, std::size_t stride, std::size_t n, Sink<Dst> sink, const std::string& name,
+                   const Field& f, std::size_t base_offset, const char* where) {
+  const auto go = [&](auto tag) {
+    decode_column_typed<decltype(tag), Dst>(base, stride, n, sink, name, f, base_offset, where);
+  };
+  switch (f.type) {
+    case 'F':
+      if (f.size == 4) return go(float{});
+      return go(double{});
+    case 'U':
+      if (f.size == 1) return go(std::uint8_t{});
+      if (f.size == 2) return go(std::uint16_t{});
+      if (f.size == 4) return go(std::uint32_t{});
+      return go(std::uint64_t{});
+    default:
+      if (f.size == 1) return go(std::int8_t{});
+      if (f.size == 2) return go(std::int16_t{});
+      if (f.size == 4) return go(std::int32_t{});
+      return go(std::int64_t{});
+  }
+}
+
+// Size the cloud's arrays for n points and decode every mapped field from a binary layout where
+// field f's value for point i sits at data + field_base(f) + i * field_stride(f).
+template <class BaseFn, class StrideFn>
+void decode_binary(const Header& h, const char* data, std::size_t n, BaseFn field_base, StrideFn field_stride,
+                   std::size_t message_offset, const char* where, const std::string& name, PointCloud& cloud) {
+  cloud.points.resize(n);
+  const auto role_field = [&](Role r) { return h.field_of_role[static_cast<int>(r)]; };
+  const bool has_normals = role_field(Role::kNormalX) >= 0;
+  if (has_normals) cloud.normals.resize(n);
+  if (role_field(Role::kIntensity) >= 0) cloud.intensities.resize(n);
+  if (role_field(Role::kRing) >= 0) cloud.rings.resize(n);
+  if (role_field(Role::kTime) >= 0) cloud.times.resize(n);
+  if (role_field(Role::kLabel) >= 0) cloud.labels.resize(n);
+  if (n == 0) return;
+  for (const Field& f : h.fields) {
+    if (f.role == Role::kNone) continue;
+    const std::size_t base = field_base(f);
+    const char* p = data + base;
+    const std::size_t stride = field_stride(f);
+    const std::size_t off = message_offset + base;
+    switch (f.role) {
+      case Role::kX:
+      case Role::kY:
+      case Role::kZ:
+        decode_column(p, stride, n,
+                      Sink<float>{cloud.points[0].data() + (static_cast<int>(f.role) - static_cast<int>(Role::kX)), 3},
+                      name, f, off, where);
+        break;
+      case Role::kNormalX:
+      case Role::kNormalY:
+      case Role::kNormalZ:
+        decode_column(
+            p, stride, n,
+            Sink<float>{cloud.normals[0].data() + (static_cast<int>(f.role) - static_cast<int>(Role::kNormalX)), 3},
+            name, f, off, where);
+        break;
+      case Role::kIntensity:
+        decode_column(p, stride, n, Sink<float>{cloud.intensities.data(), 1}, name, f, off, where);
+        break;
+      case Role::kRing:
+        decode_column(p, stride, n, Sink<std::uint16_t>{cloud.rings.data(), 1}, name, f, off, where);
+        break;
+      case Role::kTime:
+        decode_column(p, stride, n, Sink<float>{cloud.times.data(), 1}, name, f, off, where);
+        break;
+      case Role::kLabel:
+        decode_column(p, stride, n, Sink<std::int32_t>{cloud.labels.data(), 1}, name, f, off, where);
+        break;
+      case Role::kNone:
+        break;
+    }
+  }
+}
+
+void read_binary(const Header& h, const char* data, std::size_t size, const std::string& name, PointCloud& cloud) {
+  const std::size_t available = size - h.data_offset;
+  if (h.num_points > available / h.point_size) {
+    PLUMB_THROW(name << ": byte " << h.data_offset << ": DATA binary truncated: " << h.num_points
+                     << " points of " << h.point_size << " bytes need more than the " << available
+                     << " bytes that follow the header");
+  }
+  const std::size_t n = static_cast<std::size_t>(h.num_points);
+  const std::size_t ps = static_cast<std::size_t>(h.point_size);
+  decode_binary(
+      h, data + h.data_offset, n, [](const Field& f) { return static_cast<std::size_t>(f.offset); },
+      [ps](const Field&) { return ps; }, h.data_offset, "", name, cloud);
+}
+
+void read_compressed(const Header& h, const char* data, std::size_t size, const std::string& name,
+                     PointCloud& cloud) {
+  const std::size_t available = size - h.data_offset;
+  if (available < 8) {
+    PLUMB_THROW(name << ": byte " << h.data_offset << ": DATA binary_compressed truncated: missing the 8-byte "
+                     << "size prefix");
+  }
+  const char* p = data + h.data_offset;
+  const std::uint32_t compressed_size = load<std::uint32_t>(p);
+  const std::uint32_t uncompressed_size = load<std::uint32_t>(p + 4);
+  if (compressed_size > available - 8) {
+    PLUMB_THROW(name << ": byte " << h.data_offset + 8 << ": DATA binary_compressed truncated: "
+                     << compressed_size << " compressed bytes declared, " << available - 8 << " present");
+  }
+  if (h.num_points > std::numeric_limits<std::uint32_t>::max() / h.point_size ||
+      h.num_points * h.point_size != uncompressed_size) {
+    PLUMB_THROW(name << ": byte " << h.data_offset + 4 << ": uncompressed size " << uncompressed_size
+                     << " does not match " << h.num_points << " points of " << h.point_size << " bytes");
+  }
+  if (uncompressed_size > std::uint64_t{compressed_size} * kMaxLzfRatio + 64) {
+    PLUMB_THROW(name << ": byte " << h.data_offset << ": corrupt binary_compressed data: " << uncompressed_size
+                     << " bytes cannot come from " << compressed_size << " compressed bytes");
+  }
+  std::vector<char> buffer(uncompressed_size);
+  if (uncompressed_size > 0) {
+    const unsigned int got = lzf_decompress(p + 8, compressed_size, buffer.data(), uncompressed_size);
+    if (got != uncompressed_size) {
+      PLUMB_THROW(name << ": byte " << h.data_offset + 8 << ": corrupt LZF stream (decompressed " << got
+                       << " of " << uncompressed_size << " bytes)");
+    }
+  }
+  const std::size_t n = static_cast<std::size_t>(h.num_points);
+  // Structure of arrays: field f's n values start at n * (its record offset).
+  decode_binary(
+      h, buffer.data(), n, [n](const Field& f) { return n * static_cast<std::size_t>(f.offset); },
+      [](const Field& f) { return static_cast<std::size_t>(f.size) * static_cast<std::size_t>(f.count); }, 0,
+      " of the decompressed data", name, cloud);
+}
+
+// Parse one ascii token of a field into Dst.
+template <class Dst>
+bool parse_ascii_value(std::string_view tok, const Field& f, Dst& out) {
+  if (f.type == 'F') {
+    if (f.size == 4) {
+      float v;
+      return parse_number(tok, v) && convert_value(v, out);
+    }
+    double v;
+    return parse_number(tok, v) && convert_value(v, out);
+  }
+  if (f.type == 'U') {
+    std::uint64_t v;
+    if (parse_number(tok, v)) return convert_value(v, out);
+  } else {
+    std::int64_t v;
+    if (parse_number(tok, v)) return convert_value(v, out);
+  }
+  double v;  // lenient: "3.0" in an integer column
+  return parse_number(tok, v) && convert_value(v, out);
+}
+
+void read_ascii(const Header& h, const char* data, std::size_t size, const std::string& name, PointCloud& cloud) {
+  LineCursor cur{data, data + h.data_offset, data + size, h.data_line};
+  std::uint64_t values_per_point = 0;
+  for (const Field& f : h.fields) values_per_point += f.count;
+  // A point needs at least two bytes per value ("0 "): cap the reservation by what the data can hold.
+  const std::uint64_t can_hold = (size - h.data_offset) / (2 * values_per_point) + 1;
+  const std::size_t n_reserve = static_cast<std::size_t>(std::min<std::uint64_t>(h.num_points, can_hold));
+  const auto role_field = [&](Role r) { return h.field_of_role[static_cast<int>(r)]; };
+  const bool has_normals = role_field(Role::kNormalX) >= 0;
+  const bool has_intensity = role_field(Role::kIntensity) >= 0;
+  const bool has_ring = role_field(Role::kRing) >= 0;
+  const bool has_time = role_field(Role::kTime) >= 0;
+  const bool has_label = role_field(Role::kLabel) >= 0;
+  cloud.points.reserve(n_reserve);
+  if (has_normals) cloud.normals.reserve(n_reserve);
+  if (has_intensity) cloud.intensities.reserve(n_reserve);
+  if (has_ring) cloud.rings.reserve(n_reserve);
+  if (has_time) cloud.times.reserve(n_reserve);
+  if (has_label) cloud.labels.reserve(n_reserve);
+
+  std::string_view line;
+  for (std::uint64_t i = 0; i < h.num_points; ++i) {
+    bool got_line = false;
+    while (cur.next(line)) {
+      std::size_t k = 0;
+      if (!cloud_detail::next_token(line, k).empty()) {
+        got_line = true;
+        break;
+      }
+    }
+    if (!got_line) {
+      PLUMB_THROW(name << ":" << cur.line + 1 << ": DATA ascii truncated: " << i << " of " << h.num_points
+                       << " points present");
+    }
+    Vector3f p = Vector3f::Zero(), nrm = Vector3f::Zero();
+    float intensity = 0.0f, time = 0.0f;
+    std::uint16_t ring = 0;
+    std::int32_t label = 0;
+    std::size_t pos = 0;
+    for (const Field& f : h.fields) {
+      for (std::uint64_t c = 0; c < f.count; ++c) {
+        const std::string_view tok = cloud_detail::next_token(line, pos);
+        if (tok.empty()) {
+          PLUMB_THROW(name << ":" << cur.line << ": expected " << values_per_point << " values, line ends in field '"
+                           << f.name << "'");
+        }
+        if (f.role == Role::kNone) continue;
+        bool ok = false;
+        switch (f.role) {
+          case Role::kX: ok = parse_ascii_value(tok, f, p.x()); break;
+          case Role::kY: ok = parse_ascii_value(tok, f, p.y()); break;
+          case Role::kZ: ok = parse_ascii_value(tok, f, p.z()); break;
+          case Role::kNormalX: ok = parse_ascii_value(tok, f, nrm.x()); break;
+          case Role::kNormalY: ok = parse_ascii_value(tok, f, nrm.y()); break;
+          case Role::kNormalZ: ok = parse_ascii_value(tok, f, nrm.z()); break;
+          case Role::kIntensity: ok = parse_ascii_value(tok, f, intensity); break;
+          case Role::kRing: ok = parse_ascii_value(tok, f, ring); break;
+          case Role::kTime: ok = parse_ascii_value(tok, f, time); break;
+          case Role::kLabel: ok = parse_ascii_value(tok, f, label); break;
+          case Role::kNone: break;
+        }
+        if (!ok) {
+          PLUMB_THROW(name << ":" << cur.line << ": cannot read '" << tok << "' as a value of field '" << f.name
+                           << "' (TYPE " << f.type << " SIZE " << f.size << ")");
+        }
+      }
+    }
+    if (!cloud_detail::next_token(line, pos).empty()) {
+      PLUMB_THROW(name << ":" << cur.line << ": more than the " << values_per_point << " values FIELDS declares");
+    }
+    cloud.points.push_back(p);
+    if (has_normals) cloud.normals.push_back(nrm);
+    if (has_intensity) cloud.intensities.push_back(intensity);
+    if (has_ring) cloud.rings.push_back(ring);
+    if (has_time) cloud.times.push_back(time);
+    if (has_label) cloud.labels.push_back(label);
+  }
+}
+
+// ---- writing ----------------------------------------------------------------------------------
+
+struct OutField {
+  const char* name;
+  char type;
+  int size;
+};
+
+std::vector<OutField> out_fields(const PointCloud& cloud) {
+  std::vector<OutField> f = {{"x", 'F', 4}, {"y", 'F', 4}, {"z", 'F', 4}};
+  if (cloud.has_normals()) {
+    f.push_back({"normal_x", 'F', 4});
+    f.push_back({"normal_y", 'F', 4});
+    f.push_back({"normal_z", 'F', 4});
+  }
+  if (cloud.has_intensities()) f.push_back({"intensity", 'F', 4});
+  if (cloud.has_rings()) f.push_back({"ring", 'U', 2});
+  if (cloud.has_times()) f.push_back({"time", 'F', 4});
+  if (cloud.has_labels()) f.push_back({"label", 'I', 4});
+  return f;
+}
+
+// Bytes of field k of point i (field order of out_fields()).
+const void* field_ptr(const PointCloud& cloud, std::string_view field, std::size_t i) {
+  if (field == "x") return &cloud.points[i].x();
+  if (field == "y") return &cloud.points[i].y();
+  if (field == "z") return &cloud.points[i].z();
+  if (field == "normal_x") return &cloud.normals[i].x();
+  if (field == "normal_y") return &cloud.normals[i].y();
+  if (field == "normal_z") return &cloud.normals[i].z();
+  if (field == "intensity") return &cloud.intensities[i];
+  if (field == "ring") return &cloud.rings[i];
+  if (field == "time") return &cloud.times[i];
+  return &cloud.labels[i];
+}
+
+template <class T>
+void append_number(std::string& out, T v) {
+  char buf[64];
+  const auto res = std::to_chars(buf, buf + sizeof(buf), v);  // shortest round-trip form
+  out.append(buf, res.ptr);
+}
+
+}  // namespace
+
+PointCloud read_pcd_buffer(const char* data, std::size_t size, const std::string& name,
+                           const PcdReadSettings& settings) {
+  if (data == nullptr || size == 0) PLUMB_THROW(name << ": empty PCD file");
+  const Header h = parse_header(data, size, name);
+  PointCloud cloud;
+  switch (h.kind) {
+    case DataKind::kAscii: read_ascii(h, data, size, name, cloud); break;
+    case DataKind::kBinary: read_binary(h, data, size, name, cloud); break;
+    case DataKind::kBinaryCompressed: read_compressed(h, data, size, name, cloud); break;
+  }
+  if (settings.drop_non_finite) {
+    const auto keep = cloud.finite_indices();
+    if (keep.size() != cloud.size()) cloud = cloud.select(keep);
+  }
+  return cloud;
+}
+
+PointCloud read_pcd(const std::string& path, const PcdReadSettings& settings) {
+  const std::vector<char> data = cloud_detail::slurp_file(path);
+  return read_pcd_buffer(data.data(), data.size(), path, settings);
+}
+
+std::string write_pcd_buffer(const PointCloud& cloud, const PcdWriteSettings& settings) {
+  cloud.check_consistent("write_pcd");
+  const std::vector<OutField> fields = out_fields(cloud);
+  const std::size_t n = cloud.size();
+  std::size_t point_size = 0;
+  for (const OutField& f : fields) point_size += static_cast<std::size_t>(f.size);
+
+  std::string out;
+  out += "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS";
+  for (const OutField& f : fields) (out += ' ') += f.name;
+  out += "\nSIZE";
+  for (const OutField& f : fields) (out += ' ') += std::to_string(f.size);
+  out += "\nTYPE";
+  for (const OutField& f : fields) (out += ' ') += f.type;
+  out += "\nCOUNT";
+  for (std::size_t k = 0; k < fields.size(); ++k) out += " 1";
+  out += "\nWIDTH " + std::to_string(n) + "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + std::to_string(n) +
+         "\nDATA ";
+
+  switch (settings.encoding) {
+    case PcdEncoding::kAscii: {
+      out += "ascii\n";
+      out.reserve(out.size() + n * fields.size() * 12);
+      for (std::size_t i = 0; i < n; ++i) {
+        for (std::size_t k = 0; k < fields.size(); ++k) {
+          if (k > 0) out += ' ';
+          const void* p = field_ptr(cloud, fields[k].name, i);
+          if (fields[k].type == 'F') {
+            append_number(out, *static_cast<const float*>(p));
+          } else if (fields[k].type == 'U') {
+            append_number(out, *static_cast<const std::uint16_t*>(p));
+          } else {
+            append_number(out, *static_cast<const std::int32_t*>(p));
+          }
+        }
+        out += '\n';
+      }
+      break;
+    }
+    case PcdEncoding::kBinary: {
+      out += "binary\n";
+      std::size_t pos = out.size();
+      out.resize(pos + n * point_size);
+      for (std::size_t i = 0; i < n; ++i) {
+        for (const OutField& f : fields) {
+          std::memcpy(&out[pos], field_ptr(cloud, f.name, i), static_cast<std::size_t>(f.size));
+          pos += static_cast<std::size_t>(f.size);
+        }
+      }
+      break;
+    }
+    case PcdEncoding::kBinaryCompressed: {
+      out += "binary_compressed\n";
+      PLUMB_CHECK(n <= std::numeric_limits<std::uint32_t>::max() / point_size,
+                  "write_pcd: " << n << " points are too many for binary_compressed (4 GiB limit)");
+      std::vector<char> soa(n * point_size);
+      std::size_t pos = 0;
+      for (const OutField& f : fields) {
+        for (std::size_t i = 0; i < n; ++i) {
+          std::memcpy(&soa[pos], field_ptr(cloud, f.name, i), static_cast<std::size_t>(f.size));
+          pos += static_cast<std::size_t>(f.size);
+        }
+      }
+      const auto uncompressed = static_cast<std::uint32_t>(soa.size());
+      // LZF's worst case grows the input by one byte per 32 literals.
+      std::vector<char> compressed(soa.size() + soa.size() / 16 + 64);
+      std::uint32_t compressed_size = 0;
+      if (!soa.empty()) {
+        compressed_size = lzf_compress(soa.data(), uncompressed, compressed.data(),
+                                       static_cast<unsigned int>(compressed.size()));
+        PLUMB_CHECK(compressed_size > 0, "write_pcd: LZF compression failed");
+      }
+      char prefix[8];
+      std::memcpy(prefix, &compressed_size, 4);
+      std::memcpy(prefix + 4, &uncompressed, 4);
+      out.append(prefix, 8);
+      out.append(compressed.data(), compressed_size);
+      break;
+    }
+  }
+  return out;
+}
+
+void write_pcd(const std::string& path, const PointCloud& cloud, const PcdWriteSettings& settings) {
+  std::string bytes;
+  try {
+    bytes = write_pcd_buffer(cloud, settings);
+  } catch (const Error& e) {
+    PLUMB_THROW(path << ": " << e.what());
+  }
+  cloud_detail::write_file(path, bytes.data(), bytes.size());
+}
+
+}  // namespace plumb::io
