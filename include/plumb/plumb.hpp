@@ -14,3 +14,17 @@
 #include "plumb/core/status.hpp"
 #include "plumb/core/trajectory.hpp"
 #include "plumb/core/types.hpp"
+
+#include "plumb/search/brute_force.hpp"
+#include "plumb/search/kdtree.hpp"
+#include "plumb/search/neighbors.hpp"
+
+#include "plumb/filters/crop.hpp"
+#include "plumb/filters/voxel_grid.hpp"
+
+#include "plumb/io/pcd.hpp"
+#include "plumb/io/trajectory.hpp"
+
+#include "plumb/eval/align.hpp"
+#include "plumb/eval/kitti_segments.hpp"
+#include "plumb/eval/metrics.hpp"
