@@ -167,4 +167,12 @@ inline bool convert_value(Src v, Dst& out) {
   }
 }
 
+/// Append the shortest decimal form that reads back to exactly `v` (floats) or the integer.
+template <class T>
+void append_number(std::string& out, T v) {
+  char buf[64];
+  const auto res = std::to_chars(buf, buf + sizeof(buf), v);
+  out.append(buf, res.ptr);
+}
+
 }  // namespace plumb::io::cloud_detail

@@ -17,6 +17,7 @@
 namespace plumb::io {
 namespace {
 
+using cloud_detail::append_number;
 using cloud_detail::convert_value;
 using cloud_detail::LineCursor;
 using cloud_detail::load;
@@ -528,13 +529,6 @@ const void* field_ptr(const PointCloud& cloud, std::string_view field, std::size
   if (field == "ring") return &cloud.rings[i];
   if (field == "time") return &cloud.times[i];
   return &cloud.labels[i];
-}
-
-template <class T>
-void append_number(std::string& out, T v) {
-  char buf[64];
-  const auto res = std::to_chars(buf, buf + sizeof(buf), v);  // shortest round-trip form
-  out.append(buf, res.ptr);
 }
 
 }  // namespace
