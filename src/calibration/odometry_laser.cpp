@@ -291,7 +291,8 @@ OdometryLaserCalibrationResult calibrate_odometry_laser(const std::vector<Calibr
     return result;
   }
   const Matrix6d scaled_inv = eig.eigenvectors() * ev.cwiseInverse().asDiagonal() * eig.eigenvectors().transpose();
-  result.covariance = inv_sqrt.asDiagonal() * scaled_inv * inv_sqrt.asDiagonal();
+  const Matrix6d covariance = inv_sqrt.asDiagonal() * scaled_inv * inv_sqrt.asDiagonal();
+  result.covariance = 0.5 * (covariance + covariance.transpose());
   result.status = Status::kOk;
   return result;
 }
