@@ -17,6 +17,7 @@
 namespace plumb::cli {
 // One declaration per subcommand file.
 void register_eval_command(CLI::App& app);
+void register_calibrate_command(CLI::App& app);
 void register_ifc_commands(CLI::App& app);
 }  // namespace plumb::cli
 
@@ -27,6 +28,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
 
   plumb::cli::register_eval_command(app);
+  plumb::cli::register_calibrate_command(app);
   plumb::cli::register_ifc_commands(app);
 
   try {
