@@ -232,11 +232,16 @@ void subtract_volume(Soup& s, const Volume& vol, double eps) {
       }
       active.swap(next);
     }
+    // A piece is removed when the material just behind it (against its outward normal) is inside
+    // the volume: this also drops faces that lie on the volume's boundary with their material gone.
+    Vector3d n = (b - a).cross(c - a);
+    const double nn = n.norm();
+    n = nn > 0 ? Vector3d(n / nn) : Vector3d::Zero();
     for (auto& poly : active) {
       Vector3d centroid = Vector3d::Zero();
       for (const auto& p : poly) centroid += p;
       centroid /= static_cast<double>(poly.size());
-      if (!vol.inside(centroid, eps)) done.push_back(std::move(poly));
+      if (!vol.inside(centroid - 10.0 * eps * n, eps)) done.push_back(std::move(poly));
     }
     if (done.size() == 1 && done[0].size() == 3 && done[0][0] == a && done[0][1] == b && done[0][2] == c) {
       out.t.push_back(tri);
