@@ -198,6 +198,37 @@ TEST(VoxelGridTest, PointsExactlyOnVoxelBorders) {
   for (double l : {0.125, 0.25, 0.5}) expect_nearest_matches_oracle(snapped, l, 1);
 }
 
+TEST(VoxelGridTest, BordersWhereProductAndQuotientDisagreeFollowTheQuotient) {
+  // For leaves without an exact inverse, (p - min) * (1 / leaf) and (p - min) / leaf can have
+  // different floors right at a voxel border. Find such float coordinates (the search is part of
+  // the test, so it cannot pass vacuously) and check the documented quotient convention holds.
+  // Candidates: exact floats j / 256. Both directions occur: 1.75 / 0.07 is 24.999999999999996
+  // as a quotient but exactly 25 as a product; 3.25 / 0.13 is exactly 25 as a quotient but
+  // 24.999999999999996 as a product.
+  for (double leaf : {0.07, 1.1, 0.13, 0.17}) {
+    PointCloud cloud;
+    cloud.points.emplace_back(0.0f, 0.0f, 0.0f);  // bounding-box min at the origin
+    const double inv = 1.0 / leaf;
+    std::size_t num_disagreeing = 0;
+    for (int j = 1; j < 400000 && num_disagreeing < 40; ++j) {
+      const float x = static_cast<float>(j) / 256.0f;
+      const double d = static_cast<double>(x);
+      if (std::floor(d * inv) != std::floor(d / leaf)) {
+        ++num_disagreeing;
+        cloud.points.emplace_back(x, 0.5f * static_cast<float>(leaf), x);
+        // A neighbour just below the border: must land in the voxel before.
+        cloud.points.emplace_back(std::nextafter(x, 0.0f), 0.5f * static_cast<float>(leaf), x);
+      }
+    }
+    ASSERT_GT(num_disagreeing, 0u) << "leaf " << leaf;
+    // Points spread over voxels so most are alone: then the kept index reveals the voxel split.
+    expect_nearest_matches_oracle(cloud, leaf, 1);
+    VoxelGridSettings s;
+    s.leaf_size = leaf;
+    EXPECT_EQ(voxel_grid(cloud, s).num_voxels, oracle_voxels(cloud, leaf).size());
+  }
+}
+
 TEST(VoxelGridTest, TiesGoToLowestSourceIndex) {
   // Two points (exact in float) symmetric about their centroid (0.5, 0.5, 0.5): equally near, so
   // the one that comes first in the input is kept, whichever it is.

@@ -62,7 +62,8 @@ struct VoxelGridResult {
 /// @param settings see VoxelGridSettings.
 /// @return see VoxelGridResult. Non-finite points are dropped and counted.
 /// @throws plumb::Error if leaf_size is not finite and > 0, min_points_per_voxel is 0, the cloud's
-///         fields are inconsistent, or the grid does not fit a 64-bit key.
+///         fields are inconsistent, the grid does not fit a 64-bit key, or the cloud has 2^32 or
+///         more points.
 /// @note Deterministic: output sorted by voxel key ascending, i.e. by (i_z, i_y, i_x)
 ///       lexicographically; the result depends only on the input and the settings.
 ///       O(n) time (keys + LSD radix sort + two linear passes), O(n) extra memory, no hashing, one

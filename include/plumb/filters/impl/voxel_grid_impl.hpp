@@ -8,6 +8,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <memory>
+#include <utility>
 #include <vector>
 
 #include "plumb/core/error.hpp"
@@ -67,64 +69,103 @@ inline VoxelKeyLayout make_voxel_key_layout(const Vector3d& min, const Vector3d&
   return layout;
 }
 
-/// Voxel key of a finite point inside the layout's bounds.
-inline std::uint64_t voxel_key(const VoxelKeyLayout& layout, const Vector3f& p) {
-  const double ix = std::floor((static_cast<double>(p[0]) - layout.origin[0]) / layout.leaf_size);
-  const double iy = std::floor((static_cast<double>(p[1]) - layout.origin[1]) / layout.leaf_size);
-  const double iz = std::floor((static_cast<double>(p[2]) - layout.origin[2]) / layout.leaf_size);
-  return static_cast<std::uint64_t>(ix) + layout.stride_y * static_cast<std::uint64_t>(iy) +
-         layout.stride_z * static_cast<std::uint64_t>(iz);
-}
+/// Voxel key of a finite point inside the layout's bounds (every coordinate >= origin).
+///
+/// The documented coordinate is floor((p - min) / leaf) with a true division. Division is slow, so
+/// the product q = (p - min) * (1 / leaf) is used instead where it provably has the same floor: q and
+/// the quotient differ by less than 3.4e-16 * q (three roundings of at most 2^-53 each), so their
+/// floors can differ only when q lies within 1e-15 * (q + 1) of an integer; those points (e.g.
+/// exactly on a voxel border) are recomputed with the division.
+class VoxelKeyer {
+ public:
+  explicit VoxelKeyer(const VoxelKeyLayout& layout)
+      : layout_(layout), inv_leaf_(1.0 / layout.leaf_size) {
+    constexpr std::uint64_t kFastLimit = std::uint64_t{1} << 52;  // q exact in int64 and double
+    fast_ = std::isfinite(inv_leaf_) && layout.n[0] <= kFastLimit && layout.n[1] <= kFastLimit &&
+            layout.n[2] <= kFastLimit;
+  }
 
-/// Stable LSD radix sort of `a` by the low `key_bits` bits of key_of(element); `tmp` is scratch.
-/// Digits of at most 11 bits (a 2048-entry histogram stays in L1); passes whose digit is the same
-/// for every element are skipped.
-template <typename T, typename KeyOf>
-void radix_sort_by_key(std::vector<T>& a, std::vector<T>& tmp, int key_bits, KeyOf key_of) {
-  const std::size_t n = a.size();
-  if (n < 2 || key_bits <= 0) return;
-  const int num_passes = (key_bits + 10) / 11;
-  const int digit_bits = (key_bits + num_passes - 1) / num_passes;
-  const std::size_t num_buckets = std::size_t{1} << digit_bits;
-  const std::uint64_t mask = num_buckets - 1;
-  std::vector<std::size_t> hist(num_buckets * static_cast<std::size_t>(num_passes), 0);
-  for (const T& x : a) {
-    const std::uint64_t k = key_of(x);
-    for (int pass = 0; pass < num_passes; ++pass) {
-      ++hist[static_cast<std::size_t>(pass) * num_buckets +
-             static_cast<std::size_t>((k >> (pass * digit_bits)) & mask)];
+  std::uint64_t key(const Vector3f& p) const {
+    return coord(p[0], 0) + layout_.stride_y * coord(p[1], 1) + layout_.stride_z * coord(p[2], 2);
+  }
+
+ private:
+  std::uint64_t coord(float x, int a) const {
+    const double d = static_cast<double>(x) - layout_.origin[a];  // >= 0
+    if (fast_) {
+      const double q = d * inv_leaf_;
+      const std::int64_t t = static_cast<std::int64_t>(q);  // q >= 0: truncation is floor
+      const double frac = q - static_cast<double>(t);       // exact
+      const double tol = 1e-15 * (q + 1.0);
+      if (frac > tol && frac < 1.0 - tol) return static_cast<std::uint64_t>(t);
+    }
+    return static_cast<std::uint64_t>(std::floor(d / layout_.leaf_size));
+  }
+
+  const VoxelKeyLayout& layout_;
+  double inv_leaf_;
+  bool fast_ = false;
+};
+
+/// Digits of an LSD radix sort over `key_bits` bits: at most 11 bits per digit (a 2048-entry
+/// histogram per pass stays in L1), the passes balanced.
+struct RadixPlan {
+  explicit RadixPlan(int key_bits) {
+    num_passes = key_bits <= 0 ? 0 : (key_bits + 10) / 11;
+    digit_bits = num_passes == 0 ? 0 : (key_bits + num_passes - 1) / num_passes;
+    mask = (std::uint64_t{1} << digit_bits) - 1;
+    hist.assign(static_cast<std::size_t>(num_passes) << digit_bits, 0);
+  }
+  /// Count key k in every pass's histogram.
+  void count(std::uint64_t k) {
+    std::uint32_t* h = hist.data();
+    for (int pass = 0; pass < num_passes; ++pass, h += (std::size_t{1} << digit_bits)) {
+      ++h[(k >> (pass * digit_bits)) & mask];
     }
   }
-  tmp.resize(n);
-  for (int pass = 0; pass < num_passes; ++pass) {
-    std::size_t* h = hist.data() + static_cast<std::size_t>(pass) * num_buckets;
-    const int shift = pass * digit_bits;
-    if (h[static_cast<std::size_t>((key_of(a[0]) >> shift) & mask)] == n) continue;  // one bucket
-    std::size_t sum = 0;
+  int num_passes = 0;
+  int digit_bits = 0;
+  std::uint64_t mask = 0;
+  std::vector<std::uint32_t> hist;  ///< num_passes histograms of 2^digit_bits counts
+};
+
+/// Stable LSD radix sort of a[0, n) by key_of(element), with histograms already counted in `plan`;
+/// `tmp` is scratch of n elements. Passes whose digit is the same for every element are skipped.
+/// @return the buffer (a or tmp) that holds the sorted sequence.
+template <typename T, typename KeyOf>
+T* radix_sort_by_key(T* a, T* tmp, std::size_t n, RadixPlan& plan, KeyOf key_of) {
+  if (n < 2) return a;
+  const std::size_t num_buckets = std::size_t{1} << plan.digit_bits;
+  for (int pass = 0; pass < plan.num_passes; ++pass) {
+    std::uint32_t* h = plan.hist.data() + static_cast<std::size_t>(pass) * num_buckets;
+    const int shift = pass * plan.digit_bits;
+    const std::uint64_t mask = plan.mask;
+    if (h[(key_of(a[0]) >> shift) & mask] == n) continue;  // one bucket: nothing to do
+    std::uint32_t sum = 0;
     for (std::size_t b = 0; b < num_buckets; ++b) {
-      const std::size_t c = h[b];
+      const std::uint32_t c = h[b];
       h[b] = sum;
       sum += c;
     }
-    for (const T& x : a) tmp[h[static_cast<std::size_t>((key_of(x) >> shift) & mask)]++] = x;
-    a.swap(tmp);
+    for (std::size_t i = 0; i < n; ++i) tmp[h[(key_of(a[i]) >> shift) & mask]++] = a[i];
+    std::swap(a, tmp);
   }
+  return a;
 }
 
 /// (key, source index) of a point when the two do not fit one 64-bit word together.
 struct VoxelKeyIndex {
   std::uint64_t key;
-  std::size_t index;
+  std::uint32_t index;
 };
 
 /// One linear pass over runs of equal keys in `sorted` (ascending keys, ascending source index
 /// within a run): centroids in double, then the nearest point or the averaged fields.
 template <typename T, typename KeyOf, typename IndexOf>
-void reduce_voxel_runs(const PointCloud& cloud, const std::vector<T>& sorted, KeyOf key_of,
+void reduce_voxel_runs(const PointCloud& cloud, const T* sorted, std::size_t n, KeyOf key_of,
                        IndexOf index_of, const VoxelGridSettings& settings,
                        VoxelGridResult& result) {
   const std::vector<Vector3f>& pts = cloud.points;
-  const std::size_t n = sorted.size();
   const bool nearest_mode = settings.mode == VoxelMode::kNearestToCentroid;
   PointCloud& out = result.cloud;
 
@@ -143,7 +184,10 @@ void reduce_voxel_runs(const PointCloud& cloud, const std::vector<T>& sorted, Ke
     return best;
   };
 
-  if (!nearest_mode) {
+  if (nearest_mode) {
+    result.indices.reserve(n / 4);
+  } else {
+    out.points.reserve(n / 4);
     if (cloud.has_normals()) out.normals.reserve(n / 4);
     if (cloud.has_intensities()) out.intensities.reserve(n / 4);
     if (cloud.has_rings()) out.rings.reserve(n / 4);
@@ -268,36 +312,47 @@ inline VoxelGridResult voxel_grid(const PointCloud& cloud, const VoxelGridSettin
   const detail::VoxelKeyLayout layout =
       detail::make_voxel_key_layout(lo.cast<double>(), hi.cast<double>(), leaf);
 
-  // Pass 2: keys, then a stable radix sort (keeps source order inside a voxel).
+  // Pass 2: keys and their radix histograms, then a stable radix sort (source order is kept
+  // inside a voxel) and one pass over the runs of equal keys. No hashing, no per-voxel allocation.
+  PLUMB_CHECK(n <= std::numeric_limits<std::uint32_t>::max(),
+              "voxel_grid: clouds of more than 2^32 - 1 points are not supported, got " << n);
+  const detail::VoxelKeyer keyer(layout);
+  detail::RadixPlan plan(layout.key_bits);
+  const bool all_finite = num_finite == n;
   const int index_bits = detail::bit_width_u64(static_cast<std::uint64_t>(n - 1));
   if (layout.key_bits + index_bits <= 64) {
     // Packed: key in the high bits, source index in the low bits of one word.
-    std::vector<std::uint64_t> items;
-    items.reserve(num_finite);
+    std::unique_ptr<std::uint64_t[]> items(new std::uint64_t[num_finite]);
+    std::unique_ptr<std::uint64_t[]> tmp(new std::uint64_t[num_finite]);
+    std::size_t m = 0;
     for (std::size_t i = 0; i < n; ++i) {
-      if (!pts[i].allFinite()) continue;
-      items.push_back((detail::voxel_key(layout, pts[i]) << index_bits) |
-                      static_cast<std::uint64_t>(i));
+      if (!all_finite && !pts[i].allFinite()) continue;
+      const std::uint64_t key = keyer.key(pts[i]);
+      plan.count(key);
+      items[m++] = (key << index_bits) | static_cast<std::uint64_t>(i);
     }
-    std::vector<std::uint64_t> tmp;
     auto key_of = [index_bits](std::uint64_t x) { return x >> index_bits; };
     const std::uint64_t index_mask =
         index_bits == 0 ? 0 : (~std::uint64_t{0} >> (64 - index_bits));
     auto index_of = [index_mask](std::uint64_t x) { return static_cast<std::size_t>(x & index_mask); };
-    detail::radix_sort_by_key(items, tmp, layout.key_bits, key_of);
-    detail::reduce_voxel_runs(cloud, items, key_of, index_of, settings, result);
+    const std::uint64_t* sorted =
+        detail::radix_sort_by_key(items.get(), tmp.get(), num_finite, plan, key_of);
+    detail::reduce_voxel_runs(cloud, sorted, num_finite, key_of, index_of, settings, result);
   } else {
-    std::vector<detail::VoxelKeyIndex> items;
-    items.reserve(num_finite);
+    using Item = detail::VoxelKeyIndex;
+    std::unique_ptr<Item[]> items(new Item[num_finite]);
+    std::unique_ptr<Item[]> tmp(new Item[num_finite]);
+    std::size_t m = 0;
     for (std::size_t i = 0; i < n; ++i) {
-      if (!pts[i].allFinite()) continue;
-      items.push_back({detail::voxel_key(layout, pts[i]), i});
+      if (!all_finite && !pts[i].allFinite()) continue;
+      const std::uint64_t key = keyer.key(pts[i]);
+      plan.count(key);
+      items[m++] = Item{key, static_cast<std::uint32_t>(i)};
     }
-    std::vector<detail::VoxelKeyIndex> tmp;
-    auto key_of = [](const detail::VoxelKeyIndex& x) { return x.key; };
-    auto index_of = [](const detail::VoxelKeyIndex& x) { return x.index; };
-    detail::radix_sort_by_key(items, tmp, layout.key_bits, key_of);
-    detail::reduce_voxel_runs(cloud, items, key_of, index_of, settings, result);
+    auto key_of = [](const Item& x) { return x.key; };
+    auto index_of = [](const Item& x) { return static_cast<std::size_t>(x.index); };
+    const Item* sorted = detail::radix_sort_by_key(items.get(), tmp.get(), num_finite, plan, key_of);
+    detail::reduce_voxel_runs(cloud, sorted, num_finite, key_of, index_of, settings, result);
   }
   result.status = result.cloud.empty() ? Status::kInsufficientData : Status::kOk;
   return result;
