@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // KdTree against the BruteForceSearch oracle, edge cases, bad input, threads and real data.
 
+#include "plumb/search/kdtree.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -16,7 +18,6 @@
 #include "plumb/core/point_cloud.hpp"
 #include "plumb/core/rng.hpp"
 #include "plumb/search/brute_force.hpp"
-#include "plumb/search/kdtree.hpp"
 #include "test_data.hpp"
 
 #if __has_include("plumb/io/pcd.hpp")
@@ -74,59 +75,93 @@ float true_dist_sq(const Points<Dim>& pts, std::size_t i, const Eigen::Matrix<fl
 // kNN of the tree equals the oracle's up to ties: the same sorted distances, every index distinct,
 // finite, and at the distance reported for it.
 template <int Dim>
+void expect_knn_equal(const std::vector<const KdTree<Dim>*>& trees,
+                      const BruteForceSearch<Dim>& oracle, const Points<Dim>& pts,
+                      const Eigen::Matrix<float, Dim, 1>& q, std::size_t k,
+                      const std::string& what) {
+  std::vector<std::size_t> bi;
+  std::vector<float> bd;
+  const std::size_t bn = oracle.knn(q, k, bi, bd);
+  for (const KdTree<Dim>* tree : trees) {
+    std::vector<std::size_t> ti;
+    std::vector<float> td;
+    const std::size_t tn = tree->knn(q, k, ti, td);
+    ASSERT_EQ(tn, bn) << what;
+    ASSERT_EQ(ti.size(), tn) << what;
+    ASSERT_EQ(td.size(), tn) << what;
+    EXPECT_EQ(td, bd) << what << " k=" << k;
+    std::set<std::size_t> seen;
+    for (std::size_t i = 0; i < tn; ++i) {
+      ASSERT_LT(ti[i], pts.size()) << what;
+      EXPECT_TRUE(pts[ti[i]].allFinite()) << what;
+      EXPECT_EQ(td[i], true_dist_sq<Dim>(pts, ti[i], q)) << what;
+      seen.insert(ti[i]);
+    }
+    EXPECT_EQ(seen.size(), tn) << what << ": repeated index";
+    EXPECT_TRUE(std::is_sorted(td.begin(), td.end())) << what;
+  }
+}
+
+template <int Dim>
 void expect_knn_equal(const KdTree<Dim>& tree, const BruteForceSearch<Dim>& oracle,
                       const Points<Dim>& pts, const Eigen::Matrix<float, Dim, 1>& q, std::size_t k,
                       const std::string& what) {
-  std::vector<std::size_t> ti, bi;
-  std::vector<float> td, bd;
-  const std::size_t tn = tree.knn(q, k, ti, td);
-  const std::size_t bn = oracle.knn(q, k, bi, bd);
-  ASSERT_EQ(tn, bn) << what;
-  ASSERT_EQ(ti.size(), tn) << what;
-  ASSERT_EQ(td.size(), tn) << what;
-  EXPECT_EQ(td, bd) << what << " k=" << k;
-  std::set<std::size_t> seen;
-  for (std::size_t i = 0; i < tn; ++i) {
-    ASSERT_LT(ti[i], pts.size()) << what;
-    EXPECT_TRUE(pts[ti[i]].allFinite()) << what;
-    EXPECT_EQ(td[i], true_dist_sq<Dim>(pts, ti[i], q)) << what;
-    seen.insert(ti[i]);
+  expect_knn_equal<Dim>({&tree}, oracle, pts, q, k, what);
+}
+
+template <int Dim>
+void expect_radius_equal(const std::vector<const KdTree<Dim>*>& trees,
+                         const BruteForceSearch<Dim>& oracle, const Eigen::Matrix<float, Dim, 1>& q,
+                         float r, const std::string& what) {
+  std::vector<std::size_t> bi;
+  std::vector<float> bd;
+  oracle.radius(q, r, bi, bd, true);
+  for (const KdTree<Dim>* tree_ptr : trees) {
+    const KdTree<Dim>& tree = *tree_ptr;
+    std::vector<std::size_t> ti;
+    std::vector<float> td;
+    tree.radius(q, r, ti, td, true);
+    EXPECT_EQ(td, bd) << what << " r=" << r;
+    EXPECT_EQ(std::multiset<std::size_t>(ti.begin(), ti.end()),
+              std::multiset<std::size_t>(bi.begin(), bi.end()))
+        << what << " r=" << r;
+    // Unsorted: same set.
+    std::vector<std::size_t> ui;
+    std::vector<float> ud;
+    tree.radius(q, r, ui, ud, false);
+    EXPECT_EQ(std::multiset<std::size_t>(ui.begin(), ui.end()),
+              std::multiset<std::size_t>(bi.begin(), bi.end()))
+        << what << " unsorted r=" << r;
   }
-  EXPECT_EQ(seen.size(), tn) << what << ": repeated index";
-  EXPECT_TRUE(std::is_sorted(td.begin(), td.end())) << what;
 }
 
 template <int Dim>
 void expect_radius_equal(const KdTree<Dim>& tree, const BruteForceSearch<Dim>& oracle,
                          const Eigen::Matrix<float, Dim, 1>& q, float r, const std::string& what) {
-  std::vector<std::size_t> ti, bi;
-  std::vector<float> td, bd;
-  tree.radius(q, r, ti, td, true);
-  oracle.radius(q, r, bi, bd, true);
-  EXPECT_EQ(td, bd) << what << " r=" << r;
-  EXPECT_EQ(std::multiset<std::size_t>(ti.begin(), ti.end()),
-            std::multiset<std::size_t>(bi.begin(), bi.end()))
-      << what << " r=" << r;
-  // Unsorted: same set.
-  std::vector<std::size_t> ui;
-  std::vector<float> ud;
-  tree.radius(q, r, ui, ud, false);
-  EXPECT_EQ(std::multiset<std::size_t>(ui.begin(), ui.end()),
-            std::multiset<std::size_t>(bi.begin(), bi.end()))
-      << what << " unsorted r=" << r;
+  expect_radius_equal<Dim>({&tree}, oracle, q, r, what);
+}
+
+template <int Dim>
+void expect_nearest_equal(const std::vector<const KdTree<Dim>*>& trees,
+                          const BruteForceSearch<Dim>& oracle,
+                          const Eigen::Matrix<float, Dim, 1>& q, float max_dist_sq,
+                          const std::string& what) {
+  const auto b = oracle.nearest(q, max_dist_sq);
+  for (const KdTree<Dim>* tree : trees) {
+    const auto t = tree->nearest(q, max_dist_sq);
+    ASSERT_EQ(t.has_value(), b.has_value()) << what << " max_dist_sq=" << max_dist_sq;
+    if (t) {
+      EXPECT_EQ(t->dist_sq, b->dist_sq) << what;
+      EXPECT_LE(t->dist_sq, max_dist_sq) << what;
+    }
+  }
 }
 
 template <int Dim>
 void expect_nearest_equal(const KdTree<Dim>& tree, const BruteForceSearch<Dim>& oracle,
                           const Eigen::Matrix<float, Dim, 1>& q, float max_dist_sq,
                           const std::string& what) {
-  const auto t = tree.nearest(q, max_dist_sq);
-  const auto b = oracle.nearest(q, max_dist_sq);
-  ASSERT_EQ(t.has_value(), b.has_value()) << what << " max_dist_sq=" << max_dist_sq;
-  if (t) {
-    EXPECT_EQ(t->dist_sq, b->dist_sq) << what;
-    EXPECT_LE(t->dist_sq, max_dist_sq) << what;
-  }
+  expect_nearest_equal<Dim>({&tree}, oracle, q, max_dist_sq, what);
 }
 
 template <int Dim>
@@ -138,24 +173,26 @@ void check_random_clouds() {
     for (std::size_t n : sizes) {
       const Points<Dim> pts = make_cloud<Dim>(n, shape, seed++);
       const BruteForceSearch<Dim> oracle(pts);
-      for (std::size_t leaf : leaf_sizes) {
-        const KdTree<Dim> tree(pts, KdTreeSettings{leaf});
+      std::vector<KdTree<Dim>> trees;
+      std::vector<const KdTree<Dim>*> tree_ptrs;
+      for (std::size_t leaf : leaf_sizes) trees.emplace_back(pts, KdTreeSettings{leaf});
+      for (const auto& tree : trees) {
         ASSERT_EQ(tree.size(), n);
-        plumb::Rng rng(seed * 7919);
-        const std::string what = "Dim=" + std::to_string(Dim) + " n=" + std::to_string(n) +
-                                 " leaf=" + std::to_string(leaf) +
-                                 (shape == Shape::kUniform ? " uniform" : " clusters");
-        const int num_queries = n >= 1000 ? 25 : 10;
-        for (int qi = 0; qi < num_queries; ++qi) {
-          // Half the queries on data points (exact hits, ties with duplicates), half random.
-          const auto q = qi % 2 == 0 ? pts[rng.uniform_index(n)] : random_query<Dim>(rng, 14.0);
-          for (std::size_t k : {std::size_t{1}, std::size_t{5}, std::size_t{10}, n + 3}) {
-            expect_knn_equal(tree, oracle, pts, q, k, what);
-          }
-          for (float r : {0.0f, 0.3f, 2.0f}) expect_radius_equal(tree, oracle, q, r, what);
-          expect_nearest_equal(tree, oracle, q, kInf, what);
-          expect_nearest_equal(tree, oracle, q, 0.05f, what);
+        tree_ptrs.push_back(&tree);
+      }
+      plumb::Rng rng(seed * 7919);
+      const std::string what = "Dim=" + std::to_string(Dim) + " n=" + std::to_string(n) +
+                               (shape == Shape::kUniform ? " uniform" : " clusters");
+      const int num_queries = n >= 1000 ? 30 : 12;
+      for (int qi = 0; qi < num_queries; ++qi) {
+        // Half the queries on data points (exact hits, ties with duplicates), half random.
+        const auto q = qi % 2 == 0 ? pts[rng.uniform_index(n)] : random_query<Dim>(rng, 14.0);
+        for (std::size_t k : {std::size_t{1}, std::size_t{5}, std::size_t{10}, n + 3}) {
+          expect_knn_equal(tree_ptrs, oracle, pts, q, k, what);
         }
+        for (float r : {0.0f, 0.3f, 2.0f}) expect_radius_equal(tree_ptrs, oracle, q, r, what);
+        expect_nearest_equal(tree_ptrs, oracle, q, kInf, what);
+        expect_nearest_equal(tree_ptrs, oracle, q, 0.05f, what);
       }
     }
   }
@@ -213,7 +250,7 @@ TEST(KdTreeTest, CollinearPoints) {
   Points<3> pts;
   for (int i = 0; i < 600; ++i) {
     const float t = 0.01f * static_cast<float>(i);
-    pts.emplace_back(t, 0.0f, 0.0f);          // along x
+    pts.emplace_back(t, 0.0f, 0.0f);           // along x
     pts.emplace_back(1.0f + t, 2.0f + t, -t);  // a diagonal
   }
   const plumb::KdTree3f tree(pts, KdTreeSettings{3});
@@ -269,7 +306,7 @@ TEST(KdTreeTest, QueriesFarOutsideTheCloud) {
   const plumb::KdTree3f tree(pts);
   const plumb::BruteForceSearch3f oracle(pts);
   for (const Eigen::Vector3f& q : {Eigen::Vector3f(1e5f, 0, 0), Eigen::Vector3f(-3e3f, 2e3f, 5e2f),
-                                  Eigen::Vector3f(0, 0, -1e4f), Eigen::Vector3f(50, 50, 50)}) {
+                                   Eigen::Vector3f(0, 0, -1e4f), Eigen::Vector3f(50, 50, 50)}) {
     expect_knn_equal(tree, oracle, pts, q, 8, "far");
     expect_nearest_equal(tree, oracle, q, kInf, "far");
     EXPECT_FALSE(tree.nearest(q, 1.0f).has_value());
@@ -286,7 +323,7 @@ TEST(KdTreeTest, TiesGiveEqualDistanceSets) {
   const plumb::KdTree2f tree(pts, KdTreeSettings{5});
   const plumb::BruteForceSearch2f oracle(pts);
   for (const Eigen::Vector2f& q : {Eigen::Vector2f(0, 0), Eigen::Vector2f(0.5f, 0.5f),
-                                  Eigen::Vector2f(3, -0.5f), Eigen::Vector2f(10.5f, 10.5f)}) {
+                                   Eigen::Vector2f(3, -0.5f), Eigen::Vector2f(10.5f, 10.5f)}) {
     for (std::size_t k : {1, 2, 4, 5, 9, 13}) expect_knn_equal(tree, oracle, pts, q, k, "grid");
     expect_radius_equal(tree, oracle, q, 1.0f, "grid");
     expect_radius_equal(tree, oracle, q, 2.5f, "grid");
@@ -340,8 +377,8 @@ TEST(KdTreeTest, NonFinitePointsAreSkipped) {
 TEST(KdTreeTest, NonFiniteQueryFindsNothing) {
   const Points<3> pts = make_cloud<3>(100, Shape::kUniform, 51);
   const plumb::KdTree3f tree(pts);
-  for (const Eigen::Vector3f& q : {Eigen::Vector3f(kNaN, 0, 0), Eigen::Vector3f(0, kInf, 0),
-                                  Eigen::Vector3f(0, 0, -kInf)}) {
+  for (const Eigen::Vector3f& q :
+       {Eigen::Vector3f(kNaN, 0, 0), Eigen::Vector3f(0, kInf, 0), Eigen::Vector3f(0, 0, -kInf)}) {
     std::vector<std::size_t> idx{1, 2};
     std::vector<float> d{1, 2};
     EXPECT_EQ(tree.knn(q, 3, idx, d), 0u);
@@ -427,5 +464,30 @@ TEST(KdTreeTest, RealRoomScanMatchesBruteForce) {
   }
 }
 #endif
+
+}  // namespace
+
+namespace {
+
+TEST(KdTreeTest, DeepTreeFromExponentialSpacing) {
+  // x = 4^-i: every midpoint split peels off one point, so the tree is ~n levels deep (this
+  // exercises the recursive fallback of the search beyond its fixed stack of 64 levels).
+  for (int n : {40, 74}) {
+    Points<3> pts;
+    for (int i = 0; i < n; ++i) pts.emplace_back(std::ldexp(1.0f, -2 * i), 0.5f, -0.25f);
+    const plumb::KdTree3f tree(pts, KdTreeSettings{1});
+    EXPECT_GE(tree.max_depth(), static_cast<std::size_t>(n - 2));
+    const plumb::BruteForceSearch3f oracle(pts);
+    plumb::Rng rng(91);
+    for (int i = 0; i < 60; ++i) {
+      Eigen::Vector3f q = pts[rng.uniform_index(pts.size())];
+      if (i % 3 == 1) q.x() *= 1.3f;
+      if (i % 3 == 2) q = random_query<3>(rng, 1.0);
+      expect_knn_equal(tree, oracle, pts, q, 3, "deep n=" + std::to_string(n));
+      expect_nearest_equal(tree, oracle, q, kInf, "deep");
+      expect_radius_equal(tree, oracle, q, 0.01f, "deep");
+    }
+  }
+}
 
 }  // namespace

@@ -20,12 +20,19 @@
 
 namespace plumb {
 
+/// @brief Where a KdTree node is cut along its widest dimension.
+enum class KdTreeSplit {
+  kMidpoint,  ///< middle of the node's tight bounding box (cubic cells)
+  kMean,      ///< mean coordinate of the node's points (balanced on uneven density)
+};
+
 /// @brief Tuning of KdTree construction.
 struct KdTreeSettings {
   /// Maximum number of points in a leaf bucket (>= 1). Small buckets prune more, large ones make
   /// a shallower tree and faster builds; 10 (nanoflann's default) is a good choice for 3D kNN with
   /// k <= 20. A bucket whose points all coincide is never split, whatever its size.
   std::size_t leaf_size = 10;
+  KdTreeSplit split = KdTreeSplit::kMidpoint;  ///< cut position, see KdTreeSplit
 };
 
 /// @brief Static kd-tree over `Dim`-dimensional float points (Dim = 2 or 3).
@@ -74,6 +81,8 @@ class KdTree {
   std::size_t num_skipped() const { return num_input_points_ - ids_.size(); }
   /// @brief Number of tree nodes (inner + leaves).
   std::size_t num_nodes() const { return nodes_.size(); }
+  /// @brief Depth of the deepest node (root = 0); about log2(size() / leaf_size) on typical data.
+  std::size_t max_depth() const { return max_depth_; }
   /// @brief Settings the tree was built with.
   const KdTreeSettings& settings() const { return settings_; }
 
@@ -122,24 +131,41 @@ class KdTree {
     std::uint32_t b;  ///< leaf: one past the last point
     float lo;         ///< inner: largest coordinate along `dim` in the left child
     float hi;         ///< inner: smallest coordinate along `dim` in the right child
-    std::int32_t dim; ///< split dimension, or -1 for a leaf
+    std::int32_t dim; ///< split dimension, or kLeaf / kCoincidentLeaf
   };
+  static constexpr std::int32_t kLeaf = -1;            ///< a bucket of points
+  static constexpr std::int32_t kCoincidentLeaf = -2;  ///< a bucket whose points all coincide
+
+  /// Squared distance of point j of the leaf block `x` (m points) to q, in dimension order.
+  static float leaf_dist(const float* x, std::uint32_t m, std::uint32_t j, const float* q) {
+    float d = 0.0f;
+    for (int k = 0; k < Dim; ++k) {
+      const float t = x[static_cast<std::size_t>(k) * m + j] - q[k];
+      d += t * t;
+    }
+    return d;
+  }
 
   struct KnnSet;
+  struct NnSet;
   struct RadiusSet;
+  static constexpr int kMaxStack = 64;  ///< pending cells of the iterative search
 
   void build();
   float root_box_dist(const float* q, float* box_d) const;
   template <typename Set>
-  void search(std::uint32_t node, const float* q, float* box_d, Set& set) const;
-  void search_nn(std::uint32_t node, const float* q, float* box_d, float& best_d,
-                 std::uint32_t& best_i) const;
+  void scan_leaf(const Node& node, const float* q, Set& set) const;
+  template <typename Set>
+  void search(const float* q, float* box_d, Set& set) const;
+  template <typename Set>
+  void search_recursive(std::uint32_t node, const float* q, float* box_d, Set& set) const;
 
   KdTreeSettings settings_;
   std::size_t num_input_points_ = 0;
-  std::vector<float> coords_;       ///< coordinates per dimension: coords_[d * size() + i]
+  std::vector<float> coords_;       ///< leaf blocks: leaf [a, b) holds its x's, then y's (, z's)
   std::vector<std::uint32_t> ids_;  ///< original index of stored point i
   std::vector<Node> nodes_;         ///< depth-first; nodes_[0] is the root
+  std::size_t max_depth_ = 0;       ///< depth of the deepest node (root = 0)
   float box_lo_[Dim] = {};          ///< bounding box of all stored points
   float box_hi_[Dim] = {};
 };

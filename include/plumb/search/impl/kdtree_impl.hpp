@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <utility>
 #include <vector>
@@ -28,6 +29,7 @@ struct KdTree<Dim>::KnnSet {
   float worst = std::numeric_limits<float>::infinity();
 
   bool visit(float box_dist) const { return box_dist < worst; }
+  bool accepts(float d) const { return d < worst; }
   void add(float d, std::uint32_t i) {
     if (!(d < worst)) return;
     std::size_t j = count < k ? count++ : k - 1;
@@ -42,6 +44,23 @@ struct KdTree<Dim>::KnnSet {
   }
 };
 
+/// The single nearest point with d < best_d (best_d starts at the caller's limit).
+template <int Dim>
+struct KdTree<Dim>::NnSet {
+  static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  float best_d = std::numeric_limits<float>::infinity();
+  std::uint32_t best_i = kNone;
+
+  bool visit(float box_dist) const { return box_dist < best_d; }
+  bool accepts(float d) const { return d < best_d; }
+  void add(float d, std::uint32_t i) {
+    if (d < best_d) {
+      best_d = d;
+      best_i = i;
+    }
+  }
+};
+
 /// Every point with d <= r^2, appended to the caller's vectors (as stored positions).
 template <int Dim>
 struct KdTree<Dim>::RadiusSet {
@@ -50,6 +69,7 @@ struct KdTree<Dim>::RadiusSet {
   float r_sq;
 
   bool visit(float box_dist) const { return box_dist <= r_sq; }
+  bool accepts(float d) const { return d <= r_sq; }
   void add(float d, std::uint32_t i) {
     if (d <= r_sq) {
       idx->push_back(i);
@@ -91,6 +111,29 @@ KdTree<Dim>::KdTree(const std::vector<Point>& points, const KdTreeSettings& sett
   build();
 }
 
+namespace detail {
+
+/// Tight [lo, hi] of x[0..count); four independent lanes so the loop pipelines (and vectorizes).
+inline void min_max(const float* x, std::size_t count, float& lo, float& hi) {
+  float l[4] = {lo, lo, lo, lo};
+  float h[4] = {hi, hi, hi, hi};
+  std::size_t i = 0;
+  for (; i + 4 <= count; i += 4) {
+    for (int j = 0; j < 4; ++j) {
+      l[j] = x[i + j] < l[j] ? x[i + j] : l[j];
+      h[j] = x[i + j] > h[j] ? x[i + j] : h[j];
+    }
+  }
+  for (; i < count; ++i) {
+    l[0] = x[i] < l[0] ? x[i] : l[0];
+    h[0] = x[i] > h[0] ? x[i] : h[0];
+  }
+  lo = std::min(std::min(l[0], l[1]), std::min(l[2], l[3]));
+  hi = std::max(std::max(h[0], h[1]), std::max(h[2], h[3]));
+}
+
+}  // namespace detail
+
 template <int Dim>
 void KdTree<Dim>::build() {
   const std::size_t n = ids_.size();
@@ -98,27 +141,37 @@ void KdTree<Dim>::build() {
   float* c[Dim];
   for (int k = 0; k < Dim; ++k) c[k] = coords_.data() + static_cast<std::size_t>(k) * n;
   std::uint32_t* ids = ids_.data();
+  // Scratch for the out-of-place partition.
+  std::vector<float> scratch(static_cast<std::size_t>(Dim) * n);
+  std::vector<std::uint32_t> scratch_ids(n);
+  float* s[Dim];
+  for (int k = 0; k < Dim; ++k) s[k] = scratch.data() + static_cast<std::size_t>(k) * n;
 
   struct Box {
     float lo[Dim];
     float hi[Dim];
   };
   struct Task {
-    std::uint32_t begin, end, parent;
+    std::uint32_t begin, end, parent, depth;
     bool is_right;
     Box box;
   };
-  Box empty_box;
-  for (int k = 0; k < Dim; ++k) {
-    empty_box.lo[k] = std::numeric_limits<float>::infinity();
-    empty_box.hi[k] = -std::numeric_limits<float>::infinity();
-  }
+  auto tight_box = [&](std::uint32_t begin, std::uint32_t end) {
+    Box box;
+    for (int k = 0; k < Dim; ++k) {
+      box.lo[k] = std::numeric_limits<float>::infinity();
+      box.hi[k] = -std::numeric_limits<float>::infinity();
+      detail::min_max(c[k] + begin, end - begin, box.lo[k], box.hi[k]);
+    }
+    return box;
+  };
 
   nodes_.clear();
   nodes_.reserve(2 * (n / std::max<std::size_t>(leaf_size / 2, 1)) + 1);
   std::vector<Task> stack;
   stack.reserve(64);
-  Task root{0, static_cast<std::uint32_t>(n), 0, false, {}};
+  Task root{0, static_cast<std::uint32_t>(n), 0, 0, false, {}};
+  max_depth_ = 0;
   for (int k = 0; k < Dim; ++k) {
     root.box.lo[k] = box_lo_[k];
     root.box.hi[k] = box_hi_[k];
@@ -129,7 +182,8 @@ void KdTree<Dim>::build() {
     const Task t = stack.back();
     stack.pop_back();
     const auto id = static_cast<std::uint32_t>(nodes_.size());
-    nodes_.push_back(Node{t.begin, t.end, 0.0f, 0.0f, -1});  // a leaf unless split below
+    max_depth_ = std::max<std::size_t>(max_depth_, t.depth);
+    nodes_.push_back(Node{t.begin, t.end, 0.0f, 0.0f, kLeaf});  // a leaf unless split below
     if (t.is_right) nodes_[t.parent].a = id;
 
     // Widest dimension of the (tight) bounding box.
@@ -142,47 +196,63 @@ void KdTree<Dim>::build() {
         dim = k;
       }
     }
-    if (t.end - t.begin <= leaf_size || !(extent > 0.0f)) continue;  // leaf (or all coincide)
+    if (!(extent > 0.0f)) {  // all points coincide: one bucket, whatever its size
+      nodes_[id].dim = kCoincidentLeaf;
+      continue;
+    }
+    if (t.end - t.begin <= leaf_size) continue;
 
     // Midpoint of the tight box: both sides are non-empty because the box is tight. When the
     // midpoint rounds onto the low end (adjacent floats), split at the high end instead.
     const float lo = t.box.lo[dim];
     const float hi = t.box.hi[dim];
     float split = 0.5f * lo + 0.5f * hi;
-    if (!(split > lo)) split = hi;
-
-    // Hoare partition on coordinate < split; the children's boxes accumulate on the way.
-    Box left = empty_box;
-    Box right = empty_box;
-    const float* cd = c[dim];
-    auto grow = [&](Box& box, std::uint32_t i) {
-      for (int k = 0; k < Dim; ++k) {
-        box.lo[k] = std::min(box.lo[k], c[k][i]);
-        box.hi[k] = std::max(box.hi[k], c[k][i]);
-      }
-    };
-    std::uint32_t i = t.begin;
-    std::uint32_t j = t.end;
-    for (;;) {
-      while (i < j && cd[i] < split) grow(left, i++);
-      while (i < j && !(cd[j - 1] < split)) grow(right, --j);
-      if (i >= j) break;
-      --j;
-      for (int k = 0; k < Dim; ++k) std::swap(c[k][i], c[k][j]);
-      std::swap(ids[i], ids[j]);
-      grow(left, i++);
-      grow(right, j);
+    if (settings_.split == KdTreeSplit::kMean) {
+      double sum = 0.0;
+      for (std::uint32_t i = t.begin; i < t.end; ++i) sum += c[dim][i];
+      split = static_cast<float>(sum / static_cast<double>(t.end - t.begin));
     }
-    const std::uint32_t mid = i;
+    if (!(split > lo) || split > hi) split = hi;
 
+    // Branch-free out-of-place partition on coordinate < split: every point is written to the
+    // next free slot of its side (left from the front, right from the back), then copied back.
+    const float* cd = c[dim];
+    const std::uint32_t count = t.end - t.begin;
+    std::uint32_t num_left = 0;
+    std::uint32_t num_right = 0;
+    for (std::uint32_t i = 0; i < count; ++i) {
+      const std::uint32_t src = t.begin + i;
+      const bool is_left = cd[src] < split;
+      const std::uint32_t pos = is_left ? num_left : count - 1 - num_right;
+      for (int k = 0; k < Dim; ++k) s[k][pos] = c[k][src];
+      scratch_ids[pos] = ids[src];
+      num_left += is_left ? 1 : 0;
+      num_right += is_left ? 0 : 1;
+    }
+    for (int k = 0; k < Dim; ++k) std::copy(s[k], s[k] + count, c[k] + t.begin);
+    std::copy(scratch_ids.data(), scratch_ids.data() + count, ids + t.begin);
+    const std::uint32_t mid = t.begin + num_left;
+
+    const Box left = tight_box(t.begin, mid);
+    const Box right = tight_box(mid, t.end);
     Node& node = nodes_[id];
     node.a = 0;  // right child, patched when it is created
     node.b = 0;
     node.lo = left.hi[dim];
     node.hi = right.lo[dim];
     node.dim = dim;
-    stack.push_back(Task{mid, t.end, id, true, right});
-    stack.push_back(Task{t.begin, mid, id, false, left});  // popped next: becomes node id + 1
+    stack.push_back(Task{mid, t.end, id, t.depth + 1, true, right});
+    stack.push_back(Task{t.begin, mid, id, t.depth + 1, false, left});  // popped next: becomes node id + 1
+  }
+
+  // Leaf-blocked layout: the points of leaf [a, b) occupy coords_[Dim * a, Dim * b), first their
+  // b - a x coordinates, then the y's (then the z's), so a leaf scan reads one contiguous block.
+  for (int k = 0; k < Dim; ++k) std::copy(c[k], c[k] + n, s[k]);
+  for (const Node& node : nodes_) {
+    if (node.dim >= 0) continue;
+    const std::size_t m = node.b - node.a;
+    float* block = coords_.data() + static_cast<std::size_t>(Dim) * node.a;
+    for (int k = 0; k < Dim; ++k) std::copy(s[k] + node.a, s[k] + node.b, block + k * m);
   }
 }
 
@@ -202,76 +272,97 @@ float KdTree<Dim>::root_box_dist(const float* q, float* box_d) const {
   return total;
 }
 
+// Scan one leaf into the set. A coincident leaf has one distance for all of its points, so it stops
+// as soon as the set takes no more (a bucket of thousands of repeated returns costs O(k)).
+template <int Dim>
+template <typename Set>
+void KdTree<Dim>::scan_leaf(const Node& node, const float* q, Set& set) const {
+  const std::uint32_t m = node.b - node.a;
+  const float* x = coords_.data() + static_cast<std::size_t>(Dim) * node.a;
+  if (node.dim == kCoincidentLeaf) {
+    const float d = leaf_dist(x, m, 0, q);
+    for (std::uint32_t j = 0; j < m && set.accepts(d); ++j) set.add(d, node.a + j);
+    return;
+  }
+  for (std::uint32_t j = 0; j < m; ++j) set.add(leaf_dist(x, m, j, q), node.a + j);
+}
+
 // Depth-first search, nearer child first. box_d[k] holds the squared distance along dimension k
 // from q to the current cell; entering the farther child replaces one term (incremental box
 // distance as in Arya & Mount). The bound is re-summed in dimension order so that it never exceeds
 // the float distance of a point inside the cell (see detail::dist_sq).
+//
+// Iterative: the descent goes to the nearer child and pushes the farther one with its bound and
+// box terms; pending cells are popped (LIFO, the same order as recursion) and skipped when the
+// bound no longer beats the set. The stack holds at most one entry per level: trees deeper than
+// kMaxStack (only from pathological, exponentially spaced data) use the recursive variant.
 template <int Dim>
 template <typename Set>
-void KdTree<Dim>::search(std::uint32_t node_id, const float* q, float* box_d, Set& set) const {
-  const Node& node = nodes_[node_id];
-  if (node.dim < 0) {
-    const std::size_t n = ids_.size();
-    const float* c = coords_.data();
-    for (std::uint32_t i = node.a; i < node.b; ++i) {
-      const float t0 = c[i] - q[0];
-      const float t1 = c[n + i] - q[1];
-      float d = t0 * t0;
-      d += t1 * t1;
-      if constexpr (Dim == 3) {
-        const float t2 = c[2 * n + i] - q[2];
-        d += t2 * t2;
-      }
-      set.add(d, i);
-    }
+void KdTree<Dim>::search(const float* q, float* box_d, Set& set) const {
+  if (max_depth_ >= kMaxStack) {
+    search_recursive(0, q, box_d, set);
     return;
   }
-  const int dim = node.dim;
-  const float diff_lo = q[dim] - node.lo;
-  const float diff_hi = q[dim] - node.hi;
-  std::uint32_t near_child;
-  std::uint32_t far_child;
-  float cut;
-  if (diff_lo + diff_hi < 0.0f) {  // q is nearer the left side
-    near_child = node_id + 1;
-    far_child = node.a;
-    cut = diff_hi < 0.0f ? diff_hi * diff_hi : 0.0f;
-  } else {
-    near_child = node.a;
-    far_child = node_id + 1;
-    cut = diff_lo > 0.0f ? diff_lo * diff_lo : 0.0f;
+  struct Pending {
+    std::uint32_t node;
+    float bound;
+    float box_d[Dim];
+  };
+  Pending stack[kMaxStack];
+  int top = 0;
+  std::uint32_t node_id = 0;
+  const Node* nodes = nodes_.data();
+  for (;;) {
+    const Node* node = nodes + node_id;
+    while (node->dim >= 0) {
+      const int dim = node->dim;
+      const float diff_lo = q[dim] - node->lo;
+      const float diff_hi = q[dim] - node->hi;
+      std::uint32_t near_child;
+      std::uint32_t far_child;
+      float cut;
+      if (diff_lo + diff_hi < 0.0f) {  // q is nearer the left side
+        near_child = node_id + 1;
+        far_child = node->a;
+        cut = diff_hi < 0.0f ? diff_hi * diff_hi : 0.0f;
+      } else {
+        near_child = node->a;
+        far_child = node_id + 1;
+        cut = diff_lo > 0.0f ? diff_lo * diff_lo : 0.0f;
+      }
+      Pending& p = stack[top];
+      float far_bound = 0.0f;
+      for (int k = 0; k < Dim; ++k) {
+        p.box_d[k] = k == dim ? std::max(cut, box_d[k]) : box_d[k];
+        far_bound += p.box_d[k];
+      }
+      if (set.visit(far_bound)) {
+        p.node = far_child;
+        p.bound = far_bound;
+        ++top;
+      }
+      node_id = near_child;
+      node = nodes + node_id;
+    }
+    scan_leaf(*node, q, set);
+    for (;;) {
+      if (top == 0) return;
+      const Pending& p = stack[--top];
+      if (!set.visit(p.bound)) continue;
+      node_id = p.node;
+      for (int k = 0; k < Dim; ++k) box_d[k] = p.box_d[k];
+      break;
+    }
   }
-  search(near_child, q, box_d, set);
-  const float saved = box_d[dim];
-  const float new_d = std::max(cut, saved);
-  box_d[dim] = new_d;
-  float bound = 0.0f;
-  for (int k = 0; k < Dim; ++k) bound += box_d[k];
-  if (set.visit(bound)) search(far_child, q, box_d, set);
-  box_d[dim] = saved;
 }
 
 template <int Dim>
-void KdTree<Dim>::search_nn(std::uint32_t node_id, const float* q, float* box_d, float& best_d,
-                            std::uint32_t& best_i) const {
+template <typename Set>
+void KdTree<Dim>::search_recursive(std::uint32_t node_id, const float* q, float* box_d,
+                                   Set& set) const {
   const Node& node = nodes_[node_id];
   if (node.dim < 0) {
-    const std::size_t n = ids_.size();
-    const float* c = coords_.data();
-    for (std::uint32_t i = node.a; i < node.b; ++i) {
-      const float t0 = c[i] - q[0];
-      const float t1 = c[n + i] - q[1];
-      float d = t0 * t0;
-      d += t1 * t1;
-      if constexpr (Dim == 3) {
-        const float t2 = c[2 * n + i] - q[2];
-        d += t2 * t2;
-      }
-      if (d < best_d) {
-        best_d = d;
-        best_i = i;
-      }
-    }
+    scan_leaf(node, q, set);
     return;
   }
   const int dim = node.dim;
@@ -289,12 +380,12 @@ void KdTree<Dim>::search_nn(std::uint32_t node_id, const float* q, float* box_d,
     far_child = node_id + 1;
     cut = diff_lo > 0.0f ? diff_lo * diff_lo : 0.0f;
   }
-  search_nn(near_child, q, box_d, best_d, best_i);
+  search_recursive(near_child, q, box_d, set);
   const float saved = box_d[dim];
   box_d[dim] = std::max(cut, saved);
   float bound = 0.0f;
   for (int k = 0; k < Dim; ++k) bound += box_d[k];
-  if (bound < best_d) search_nn(far_child, q, box_d, best_d, best_i);
+  if (set.visit(bound)) search_recursive(far_child, q, box_d, set);
   box_d[dim] = saved;
 }
 
@@ -306,7 +397,7 @@ std::size_t KdTree<Dim>::knn(const Point& query, std::size_t k, std::size_t* ind
   KnnSet set{indices, sq_dists, k};
   float box_d[Dim];
   root_box_dist(query.data(), box_d);
-  search(0, query.data(), box_d, set);
+  search(query.data(), box_d, set);
   for (std::size_t i = 0; i < set.count; ++i) indices[i] = ids_[indices[i]];
   return set.count;
 }
@@ -335,16 +426,22 @@ std::vector<Neighbor> KdTree<Dim>::knn(const Point& query, std::size_t k) const 
 
 template <int Dim>
 std::optional<Neighbor> KdTree<Dim>::nearest(const Point& query, float max_dist_sq) const {
-  if (!query.allFinite()) return std::nullopt;
-  // Accept d <= max_dist_sq: the search keeps d < best_d, so start just above the limit.
-  float best_d = std::nextafter(max_dist_sq, std::numeric_limits<float>::infinity());
-  std::uint32_t best_i = std::numeric_limits<std::uint32_t>::max();
+  if (!query.allFinite() || !(max_dist_sq >= 0.0f)) return std::nullopt;
+  // Accept d <= max_dist_sq: the set keeps d < best_d, so start one float above the limit.
+  NnSet set;
+  set.best_d = max_dist_sq;
+  if (max_dist_sq < std::numeric_limits<float>::infinity()) {
+    std::uint32_t bits;
+    std::memcpy(&bits, &max_dist_sq, sizeof bits);
+    ++bits;
+    std::memcpy(&set.best_d, &bits, sizeof bits);
+  }
   float box_d[Dim];
   const float bound = root_box_dist(query.data(), box_d);
-  if (!(bound < best_d)) return std::nullopt;
-  search_nn(0, query.data(), box_d, best_d, best_i);
-  if (best_i == std::numeric_limits<std::uint32_t>::max()) return std::nullopt;
-  return Neighbor{ids_[best_i], best_d};
+  if (!set.visit(bound)) return std::nullopt;
+  search(query.data(), box_d, set);
+  if (set.best_i == NnSet::kNone) return std::nullopt;
+  return Neighbor{ids_[set.best_i], set.best_d};
 }
 
 template <int Dim>
@@ -366,7 +463,7 @@ std::size_t KdTree<Dim>::radius(const Point& query, float r, std::vector<std::si
   RadiusSet set{&indices, &sq_dists, r * r};
   float box_d[Dim];
   const float bound = root_box_dist(query.data(), box_d);
-  if (set.visit(bound)) search(0, query.data(), box_d, set);
+  if (set.visit(bound)) search(query.data(), box_d, set);
   const std::size_t count = indices.size();
   if (sorted && count > 1) {
     std::vector<Neighbor> tmp(count);
