@@ -201,6 +201,7 @@ struct ArgParser {
   void parse_items(std::vector<StepValue>& out, int depth) {
     skip_ws();
     if (pos < end && buf[pos] == ')') return;
+    if (out.capacity() == 0) out.reserve(depth == 0 ? 10 : 4);
     for (;;) {
       out.emplace_back();
       parse_value(out.back(), depth);
