@@ -73,37 +73,50 @@ inline VoxelKeyLayout make_voxel_key_layout(const Vector3d& min, const Vector3d&
 ///
 /// The documented coordinate is floor((p - min) / leaf) with a true division. Division is slow, so
 /// the product q = (p - min) * (1 / leaf) is used instead where it provably has the same floor: q and
-/// the quotient differ by less than 3.4e-16 * q (three roundings of at most 2^-53 each), so their
-/// floors can differ only when q lies within 1e-15 * (q + 1) of an integer; those points (e.g.
-/// exactly on a voxel border) are recomputed with the division.
+/// the quotient differ by less than 3.4e-16 * q <= 3.4e-16 * n_a (three roundings of at most 2^-53
+/// each), so their floors can differ only when q lies within tol_a = 1e-15 * (n_a + 1) of an integer;
+/// those points (e.g. exactly on a voxel border) are recomputed with the division.
 class VoxelKeyer {
  public:
   explicit VoxelKeyer(const VoxelKeyLayout& layout)
       : layout_(layout), inv_leaf_(1.0 / layout.leaf_size) {
-    constexpr std::uint64_t kFastLimit = std::uint64_t{1} << 52;  // q exact in int64 and double
-    fast_ = std::isfinite(inv_leaf_) && layout.n[0] <= kFastLimit && layout.n[1] <= kFastLimit &&
-            layout.n[2] <= kFastLimit;
+    constexpr std::uint64_t kFastLimit = std::uint64_t{1} << 40;  // q exact in int64 and double
+    fast_ = std::isfinite(inv_leaf_);
+    for (int a = 0; a < 3; ++a) {
+      fast_ = fast_ && layout.n[a] <= kFastLimit;
+      half_minus_tol_[a] = 0.5 - 1e-15 * (static_cast<double>(layout.n[a]) + 1.0);
+    }
   }
 
   std::uint64_t key(const Vector3f& p) const {
-    return coord(p[0], 0) + layout_.stride_y * coord(p[1], 1) + layout_.stride_z * coord(p[2], 2);
+    if (fast_) {
+      const double qx = (static_cast<double>(p[0]) - layout_.origin[0]) * inv_leaf_;
+      const double qy = (static_cast<double>(p[1]) - layout_.origin[1]) * inv_leaf_;
+      const double qz = (static_cast<double>(p[2]) - layout_.origin[2]) * inv_leaf_;
+      const std::int64_t tx = static_cast<std::int64_t>(qx);  // q >= 0: truncation is floor
+      const std::int64_t ty = static_cast<std::int64_t>(qy);
+      const std::int64_t tz = static_cast<std::int64_t>(qz);
+      // |frac - 0.5| < 0.5 - tol  <=>  tol < frac < 1 - tol: no integer within tol of q.
+      const bool safe = (std::abs(qx - static_cast<double>(tx) - 0.5) < half_minus_tol_[0]) &
+                        (std::abs(qy - static_cast<double>(ty) - 0.5) < half_minus_tol_[1]) &
+                        (std::abs(qz - static_cast<double>(tz) - 0.5) < half_minus_tol_[2]);
+      if (safe) {
+        return static_cast<std::uint64_t>(tx) + layout_.stride_y * static_cast<std::uint64_t>(ty) +
+               layout_.stride_z * static_cast<std::uint64_t>(tz);
+      }
+    }
+    return exact(p[0], 0) + layout_.stride_y * exact(p[1], 1) + layout_.stride_z * exact(p[2], 2);
   }
 
  private:
-  std::uint64_t coord(float x, int a) const {
-    const double d = static_cast<double>(x) - layout_.origin[a];  // >= 0
-    if (fast_) {
-      const double q = d * inv_leaf_;
-      const std::int64_t t = static_cast<std::int64_t>(q);  // q >= 0: truncation is floor
-      const double frac = q - static_cast<double>(t);       // exact
-      const double tol = 1e-15 * (q + 1.0);
-      if (frac > tol && frac < 1.0 - tol) return static_cast<std::uint64_t>(t);
-    }
-    return static_cast<std::uint64_t>(std::floor(d / layout_.leaf_size));
+  std::uint64_t exact(float x, int a) const {
+    return static_cast<std::uint64_t>(
+        std::floor((static_cast<double>(x) - layout_.origin[a]) / layout_.leaf_size));
   }
 
   const VoxelKeyLayout& layout_;
   double inv_leaf_;
+  double half_minus_tol_[3] = {0.0, 0.0, 0.0};
   bool fast_ = false;
 };
 
@@ -294,16 +307,21 @@ inline VoxelGridResult voxel_grid(const PointCloud& cloud, const VoxelGridSettin
   const std::size_t n = pts.size();
 
   // Pass 1: bounding box of the finite points (float min/max are exact).
-  Vector3f lo = Vector3f::Constant(std::numeric_limits<float>::infinity());
-  Vector3f hi = -lo;
+  float lo_x = std::numeric_limits<float>::infinity(), lo_y = lo_x, lo_z = lo_x;
+  float hi_x = -lo_x, hi_y = hi_x, hi_z = hi_x;
   std::size_t num_finite = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const Vector3f& p = pts[i];
-    if (!p.allFinite()) continue;
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
+    const float x = pts[i][0], y = pts[i][1], z = pts[i][2];
+    if (!((x - x) + (y - y) + (z - z) == 0.0f)) continue;  // NaN unless all three are finite
+    lo_x = std::min(lo_x, x);
+    lo_y = std::min(lo_y, y);
+    lo_z = std::min(lo_z, z);
+    hi_x = std::max(hi_x, x);
+    hi_y = std::max(hi_y, y);
+    hi_z = std::max(hi_z, z);
     ++num_finite;
   }
+  const Vector3f lo(lo_x, lo_y, lo_z), hi(hi_x, hi_y, hi_z);
   result.num_dropped_non_finite = n - num_finite;
   if (num_finite == 0) {
     result.status = Status::kInsufficientData;
