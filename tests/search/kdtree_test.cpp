@@ -175,7 +175,11 @@ void check_random_clouds() {
       const BruteForceSearch<Dim> oracle(pts);
       std::vector<KdTree<Dim>> trees;
       std::vector<const KdTree<Dim>*> tree_ptrs;
-      for (std::size_t leaf : leaf_sizes) trees.emplace_back(pts, KdTreeSettings{leaf});
+      for (std::size_t leaf : leaf_sizes) {
+        for (auto split : {plumb::KdTreeSplit::kMean, plumb::KdTreeSplit::kMidpoint}) {
+          trees.emplace_back(pts, KdTreeSettings{leaf, split});
+        }
+      }
       for (const auto& tree : trees) {
         ASSERT_EQ(tree.size(), n);
         tree_ptrs.push_back(&tree);
@@ -475,7 +479,7 @@ TEST(KdTreeTest, DeepTreeFromExponentialSpacing) {
   for (int n : {40, 74}) {
     Points<3> pts;
     for (int i = 0; i < n; ++i) pts.emplace_back(std::ldexp(1.0f, -2 * i), 0.5f, -0.25f);
-    const plumb::KdTree3f tree(pts, KdTreeSettings{1});
+    const plumb::KdTree3f tree(pts, KdTreeSettings{1, plumb::KdTreeSplit::kMidpoint});
     EXPECT_GE(tree.max_depth(), static_cast<std::size_t>(n - 2));
     const plumb::BruteForceSearch3f oracle(pts);
     plumb::Rng rng(91);

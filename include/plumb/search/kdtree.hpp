@@ -3,7 +3,7 @@
 
 /// @file
 /// @brief KdTree<Dim>: a static kd-tree over float points for exact k-nearest, nearest and radius
-/// queries (nanoflann-style: leaf buckets, sliding-midpoint splits, incremental box distances).
+/// queries (nanoflann-style: leaf buckets, widest-dimension splits, incremental box distances).
 
 #include <cstddef>
 #include <cstdint>
@@ -21,9 +21,11 @@
 namespace plumb {
 
 /// @brief Where a KdTree node is cut along its widest dimension.
+/// On the benchmark clouds (bench/README.md) kMean builds a shallower tree (LiDAR density falls
+/// with range) and answers kNN/NN queries faster than kMidpoint.
 enum class KdTreeSplit {
-  kMidpoint,  ///< middle of the node's tight bounding box (cubic cells)
   kMean,      ///< mean coordinate of the node's points (balanced on uneven density)
+  kMidpoint,  ///< middle of the node's tight bounding box (cubic cells)
 };
 
 /// @brief Tuning of KdTree construction.
@@ -32,7 +34,7 @@ struct KdTreeSettings {
   /// a shallower tree and faster builds; 10 (nanoflann's default) is a good choice for 3D kNN with
   /// k <= 20. A bucket whose points all coincide is never split, whatever its size.
   std::size_t leaf_size = 10;
-  KdTreeSplit split = KdTreeSplit::kMidpoint;  ///< cut position, see KdTreeSplit
+  KdTreeSplit split = KdTreeSplit::kMean;  ///< cut position, see KdTreeSplit
 };
 
 /// @brief Static kd-tree over `Dim`-dimensional float points (Dim = 2 or 3).
@@ -41,10 +43,12 @@ struct KdTreeSettings {
 /// (coordinates stored per dimension); every stored point keeps its original index, and all
 /// queries report original indices into the vector (or cloud) the tree was built from.
 ///
-/// Construction splits a node's points on the widest dimension of their tight bounding box at
-/// the box midpoint (both children's boxes are accumulated during the partition pass), until at
-/// most `leaf_size` points remain or all points of a node coincide. Nodes live in one vector in
-/// depth-first order. O(n log n) time, O(n) memory.
+/// Construction splits a node's points on the widest dimension of their tight bounding box, at
+/// the mean coordinate (default; or at the box midpoint, see KdTreeSplit), with a branch-free
+/// partition, until at most `leaf_size` points remain or all points of a node coincide; the
+/// children's tight boxes (and coordinate sums) are computed in one vectorizable pass each. Nodes
+/// live in one vector in depth-first order (left child next to its parent), leaves store their
+/// coordinates as one contiguous block. O(n log n) time, O(n) memory.
 ///
 /// Non-finite points (NaN or inf in any coordinate, common in organised LiDAR frames) are skipped
 /// when building and never appear in results; size() counts only the indexed points. A tree needs

@@ -102,8 +102,6 @@ KdTree<Dim>::KdTree(const std::vector<Point>& points, const KdTreeSettings& sett
     if (!p.allFinite()) continue;
     for (int k = 0; k < Dim; ++k) {
       coords_[static_cast<std::size_t>(k) * n + j] = p[k];
-      box_lo_[k] = std::min(box_lo_[k], p[k]);
-      box_hi_[k] = std::max(box_hi_[k], p[k]);
     }
     ids_[j] = static_cast<std::uint32_t>(i);
     ++j;
@@ -113,23 +111,27 @@ KdTree<Dim>::KdTree(const std::vector<Point>& points, const KdTreeSettings& sett
 
 namespace detail {
 
-/// Tight [lo, hi] of x[0..count); four independent lanes so the loop pipelines (and vectorizes).
-inline void min_max(const float* x, std::size_t count, float& lo, float& hi) {
+/// Tight [lo, hi] and the sum of x[0..count); four independent lanes so the loop pipelines.
+inline void min_max_sum(const float* x, std::size_t count, float& lo, float& hi, float& sum) {
   float l[4] = {lo, lo, lo, lo};
   float h[4] = {hi, hi, hi, hi};
+  float s[4] = {0.0f, 0.0f, 0.0f, 0.0f};
   std::size_t i = 0;
   for (; i + 4 <= count; i += 4) {
     for (int j = 0; j < 4; ++j) {
       l[j] = x[i + j] < l[j] ? x[i + j] : l[j];
       h[j] = x[i + j] > h[j] ? x[i + j] : h[j];
+      s[j] += x[i + j];
     }
   }
   for (; i < count; ++i) {
     l[0] = x[i] < l[0] ? x[i] : l[0];
     h[0] = x[i] > h[0] ? x[i] : h[0];
+    s[0] += x[i];
   }
   lo = std::min(std::min(l[0], l[1]), std::min(l[2], l[3]));
   hi = std::max(std::max(h[0], h[1]), std::max(h[2], h[3]));
+  sum = (s[0] + s[1]) + (s[2] + s[3]);
 }
 
 }  // namespace detail
@@ -150,6 +152,7 @@ void KdTree<Dim>::build() {
   struct Box {
     float lo[Dim];
     float hi[Dim];
+    float sum[Dim];  // of the coordinates, for the mean split
   };
   struct Task {
     std::uint32_t begin, end, parent, depth;
@@ -161,7 +164,7 @@ void KdTree<Dim>::build() {
     for (int k = 0; k < Dim; ++k) {
       box.lo[k] = std::numeric_limits<float>::infinity();
       box.hi[k] = -std::numeric_limits<float>::infinity();
-      detail::min_max(c[k] + begin, end - begin, box.lo[k], box.hi[k]);
+      detail::min_max_sum(c[k] + begin, end - begin, box.lo[k], box.hi[k], box.sum[k]);
     }
     return box;
   };
@@ -170,11 +173,11 @@ void KdTree<Dim>::build() {
   nodes_.reserve(2 * (n / std::max<std::size_t>(leaf_size / 2, 1)) + 1);
   std::vector<Task> stack;
   stack.reserve(64);
-  Task root{0, static_cast<std::uint32_t>(n), 0, 0, false, {}};
+  Task root{0, static_cast<std::uint32_t>(n), 0, 0, false, tight_box(0, static_cast<std::uint32_t>(n))};
   max_depth_ = 0;
   for (int k = 0; k < Dim; ++k) {
-    root.box.lo[k] = box_lo_[k];
-    root.box.hi[k] = box_hi_[k];
+    box_lo_[k] = root.box.lo[k];
+    box_hi_[k] = root.box.hi[k];
   }
   stack.push_back(root);
 
@@ -208,9 +211,7 @@ void KdTree<Dim>::build() {
     const float hi = t.box.hi[dim];
     float split = 0.5f * lo + 0.5f * hi;
     if (settings_.split == KdTreeSplit::kMean) {
-      double sum = 0.0;
-      for (std::uint32_t i = t.begin; i < t.end; ++i) sum += c[dim][i];
-      split = static_cast<float>(sum / static_cast<double>(t.end - t.begin));
+      split = t.box.sum[dim] / static_cast<float>(t.end - t.begin);
     }
     if (!(split > lo) || split > hi) split = hi;
 
@@ -315,32 +316,28 @@ void KdTree<Dim>::search(const float* q, float* box_d, Set& set) const {
   for (;;) {
     const Node* node = nodes + node_id;
     while (node->dim >= 0) {
+      // Branch-free step: the nearer child is next, the farther one is pushed (and dropped at
+      // once when its bound cannot beat the set). lo <= hi, so on the side of the midpoint that
+      // q lies on, its offset to the other child's boundary has the sign that makes t * t the
+      // distance to that child's slab.
       const int dim = node->dim;
       const float diff_lo = q[dim] - node->lo;
       const float diff_hi = q[dim] - node->hi;
-      std::uint32_t near_child;
-      std::uint32_t far_child;
-      float cut;
-      if (diff_lo + diff_hi < 0.0f) {  // q is nearer the left side
-        near_child = node_id + 1;
-        far_child = node->a;
-        cut = diff_hi < 0.0f ? diff_hi * diff_hi : 0.0f;
-      } else {
-        near_child = node->a;
-        far_child = node_id + 1;
-        cut = diff_lo > 0.0f ? diff_lo * diff_lo : 0.0f;
-      }
+      const bool go_right = diff_lo + diff_hi >= 0.0f;
+      const std::uint32_t left_child = node_id + 1;
+      const std::uint32_t near_child = go_right ? node->a : left_child;
+      const std::uint32_t far_child = go_right ? left_child : node->a;
+      const float t = go_right ? diff_lo : diff_hi;
+      const float cut = t * t;
       Pending& p = stack[top];
       float far_bound = 0.0f;
       for (int k = 0; k < Dim; ++k) {
         p.box_d[k] = k == dim ? std::max(cut, box_d[k]) : box_d[k];
         far_bound += p.box_d[k];
       }
-      if (set.visit(far_bound)) {
-        p.node = far_child;
-        p.bound = far_bound;
-        ++top;
-      }
+      p.node = far_child;
+      p.bound = far_bound;
+      top += set.visit(far_bound) ? 1 : 0;
       node_id = near_child;
       node = nodes + node_id;
     }
