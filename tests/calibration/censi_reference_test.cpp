@@ -89,10 +89,11 @@ TEST_P(CensiReferenceTest, WithinOneSigmaOfPublishedResult) {
     // We implement the same estimator, so we should agree to the 6 digits his file prints
     // (that rounding is below 1e-3 sigma for every parameter).
     EXPECT_LE(std::abs(dev), 0.01) << names[j];
-    // Our covariance is computed the same way (Fisher information from the residual noise):
-    // it should agree with his to within a factor of two in standard deviation.
-    EXPECT_GT(std::sqrt(est.covariance(j, j)), 0.5 * sigma) << names[j];
-    EXPECT_LT(std::sqrt(est.covariance(j, j)), 2.0 * sigma) << names[j];
+    // Our covariance is computed the same way (Fisher information from the residual noise; his
+    // solver differs in the numerical derivative and evaluates it after one more rejection
+    // round): the standard deviations should agree to 10 %.
+    EXPECT_GT(std::sqrt(est.covariance(j, j)), 0.9 * sigma) << names[j];
+    EXPECT_LT(std::sqrt(est.covariance(j, j)), 1.1 * sigma) << names[j];
   }
 }
 
