@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "plumb/core/error.hpp"
+#include "plumb/core/point_cloud.hpp"
 
 namespace plumb::io::cloud_detail {
 
@@ -173,6 +174,51 @@ void append_number(std::string& out, T v) {
   char buf[64];
   const auto res = std::to_chars(buf, buf + sizeof(buf), v);
   out.append(buf, res.ptr);
+}
+
+/// One stored column of a cloud for the writers: value i is at base + i * stride.
+struct OutColumn {
+  const char* name;  ///< field / property name in the file
+  char type;         ///< 'F' float32, 'U' uint16, 'I' int32
+  int size;          ///< bytes per value
+  const char* base;
+  std::size_t stride;
+};
+
+/// x y z and every present optional field of the cloud, in the order the writers store them.
+/// `ply_names` selects PLY's nx/ny/nz over PCD's normal_x/normal_y/normal_z.
+inline std::vector<OutColumn> out_columns(const PointCloud& c, bool ply_names) {
+  static_assert(sizeof(Vector3f) == 3 * sizeof(float), "Vector3f must be three packed floats");
+  const auto vec = [](const std::vector<Vector3f>& v, int k) -> const char* {
+    if (v.empty()) return nullptr;  // no offset on a null data()
+    return reinterpret_cast<const char*>(v.data()) + k * static_cast<int>(sizeof(float));
+  };
+  std::vector<OutColumn> cols = {{"x", 'F', 4, vec(c.points, 0), sizeof(Vector3f)},
+                                 {"y", 'F', 4, vec(c.points, 1), sizeof(Vector3f)},
+                                 {"z", 'F', 4, vec(c.points, 2), sizeof(Vector3f)}};
+  if (c.has_normals()) {
+    cols.push_back({ply_names ? "nx" : "normal_x", 'F', 4, vec(c.normals, 0), sizeof(Vector3f)});
+    cols.push_back({ply_names ? "ny" : "normal_y", 'F', 4, vec(c.normals, 1), sizeof(Vector3f)});
+    cols.push_back({ply_names ? "nz" : "normal_z", 'F', 4, vec(c.normals, 2), sizeof(Vector3f)});
+  }
+  const auto col = [](const auto& v) { return reinterpret_cast<const char*>(v.data()); };
+  if (c.has_intensities()) cols.push_back({"intensity", 'F', 4, col(c.intensities), sizeof(float)});
+  if (c.has_rings()) cols.push_back({"ring", 'U', 2, col(c.rings), sizeof(std::uint16_t)});
+  if (c.has_times()) cols.push_back({"time", 'F', 4, col(c.times), sizeof(float)});
+  if (c.has_labels()) cols.push_back({"label", 'I', 4, col(c.labels), sizeof(std::int32_t)});
+  return cols;
+}
+
+/// Append value i of a column in decimal (shortest round-trip form for floats).
+inline void append_column_value(std::string& out, const OutColumn& c, std::size_t i) {
+  const char* p = c.base + i * c.stride;
+  if (c.type == 'F') {
+    append_number(out, load<float>(p));
+  } else if (c.type == 'U') {
+    append_number(out, load<std::uint16_t>(p));
+  } else {
+    append_number(out, load<std::int32_t>(p));
+  }
 }
 
 }  // namespace plumb::io::cloud_detail

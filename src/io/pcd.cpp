@@ -17,7 +17,6 @@
 namespace plumb::io {
 namespace {
 
-using cloud_detail::append_number;
 using cloud_detail::convert_value;
 using cloud_detail::LineCursor;
 using cloud_detail::load;
@@ -495,42 +494,6 @@ void read_ascii(const Header& h, const char* data, std::size_t size, const std::
   }
 }
 
-// ---- writing ----------------------------------------------------------------------------------
-
-struct OutField {
-  const char* name;
-  char type;
-  int size;
-};
-
-std::vector<OutField> out_fields(const PointCloud& cloud) {
-  std::vector<OutField> f = {{"x", 'F', 4}, {"y", 'F', 4}, {"z", 'F', 4}};
-  if (cloud.has_normals()) {
-    f.push_back({"normal_x", 'F', 4});
-    f.push_back({"normal_y", 'F', 4});
-    f.push_back({"normal_z", 'F', 4});
-  }
-  if (cloud.has_intensities()) f.push_back({"intensity", 'F', 4});
-  if (cloud.has_rings()) f.push_back({"ring", 'U', 2});
-  if (cloud.has_times()) f.push_back({"time", 'F', 4});
-  if (cloud.has_labels()) f.push_back({"label", 'I', 4});
-  return f;
-}
-
-// Bytes of field k of point i (field order of out_fields()).
-const void* field_ptr(const PointCloud& cloud, std::string_view field, std::size_t i) {
-  if (field == "x") return &cloud.points[i].x();
-  if (field == "y") return &cloud.points[i].y();
-  if (field == "z") return &cloud.points[i].z();
-  if (field == "normal_x") return &cloud.normals[i].x();
-  if (field == "normal_y") return &cloud.normals[i].y();
-  if (field == "normal_z") return &cloud.normals[i].z();
-  if (field == "intensity") return &cloud.intensities[i];
-  if (field == "ring") return &cloud.rings[i];
-  if (field == "time") return &cloud.times[i];
-  return &cloud.labels[i];
-}
-
 }  // namespace
 
 PointCloud read_pcd_buffer(const char* data, std::size_t size, const std::string& name,
@@ -557,38 +520,31 @@ PointCloud read_pcd(const std::string& path, const PcdReadSettings& settings) {
 
 std::string write_pcd_buffer(const PointCloud& cloud, const PcdWriteSettings& settings) {
   cloud.check_consistent("write_pcd");
-  const std::vector<OutField> fields = out_fields(cloud);
+  const std::vector<cloud_detail::OutColumn> cols = cloud_detail::out_columns(cloud, false);
   const std::size_t n = cloud.size();
   std::size_t point_size = 0;
-  for (const OutField& f : fields) point_size += static_cast<std::size_t>(f.size);
+  for (const auto& c : cols) point_size += static_cast<std::size_t>(c.size);
 
   std::string out;
   out += "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS";
-  for (const OutField& f : fields) (out += ' ') += f.name;
+  for (const auto& c : cols) (out += ' ') += c.name;
   out += "\nSIZE";
-  for (const OutField& f : fields) (out += ' ') += std::to_string(f.size);
+  for (const auto& c : cols) (out += ' ') += std::to_string(c.size);
   out += "\nTYPE";
-  for (const OutField& f : fields) (out += ' ') += f.type;
+  for (const auto& c : cols) (out += ' ') += c.type;
   out += "\nCOUNT";
-  for (std::size_t k = 0; k < fields.size(); ++k) out += " 1";
+  for (std::size_t k = 0; k < cols.size(); ++k) out += " 1";
   out += "\nWIDTH " + std::to_string(n) + "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + std::to_string(n) +
          "\nDATA ";
 
   switch (settings.encoding) {
     case PcdEncoding::kAscii: {
       out += "ascii\n";
-      out.reserve(out.size() + n * fields.size() * 12);
+      out.reserve(out.size() + n * cols.size() * 12);
       for (std::size_t i = 0; i < n; ++i) {
-        for (std::size_t k = 0; k < fields.size(); ++k) {
+        for (std::size_t k = 0; k < cols.size(); ++k) {
           if (k > 0) out += ' ';
-          const void* p = field_ptr(cloud, fields[k].name, i);
-          if (fields[k].type == 'F') {
-            append_number(out, *static_cast<const float*>(p));
-          } else if (fields[k].type == 'U') {
-            append_number(out, *static_cast<const std::uint16_t*>(p));
-          } else {
-            append_number(out, *static_cast<const std::int32_t*>(p));
-          }
+          cloud_detail::append_column_value(out, cols[k], i);
         }
         out += '\n';
       }
@@ -596,13 +552,14 @@ std::string write_pcd_buffer(const PointCloud& cloud, const PcdWriteSettings& se
     }
     case PcdEncoding::kBinary: {
       out += "binary\n";
-      std::size_t pos = out.size();
-      out.resize(pos + n * point_size);
-      for (std::size_t i = 0; i < n; ++i) {
-        for (const OutField& f : fields) {
-          std::memcpy(&out[pos], field_ptr(cloud, f.name, i), static_cast<std::size_t>(f.size));
-          pos += static_cast<std::size_t>(f.size);
-        }
+      const std::size_t start = out.size();
+      out.resize(start + n * point_size);
+      std::size_t offset = 0;  // interleaved records: column k at offset within each record
+      for (const auto& c : cols) {
+        const std::size_t s = static_cast<std::size_t>(c.size);
+        char* dst = &out[start + offset];
+        for (std::size_t i = 0; i < n; ++i) std::memcpy(dst + i * point_size, c.base + i * c.stride, s);
+        offset += s;
       }
       break;
     }
@@ -611,12 +568,10 @@ std::string write_pcd_buffer(const PointCloud& cloud, const PcdWriteSettings& se
       PLUMB_CHECK(n <= std::numeric_limits<std::uint32_t>::max() / point_size,
                   "write_pcd: " << n << " points are too many for binary_compressed (4 GiB limit)");
       std::vector<char> soa(n * point_size);
-      std::size_t pos = 0;
-      for (const OutField& f : fields) {
-        for (std::size_t i = 0; i < n; ++i) {
-          std::memcpy(&soa[pos], field_ptr(cloud, f.name, i), static_cast<std::size_t>(f.size));
-          pos += static_cast<std::size_t>(f.size);
-        }
+      std::size_t pos = 0;  // structure of arrays: each column's n values in turn
+      for (const auto& c : cols) {
+        const std::size_t s = static_cast<std::size_t>(c.size);
+        for (std::size_t i = 0; i < n; ++i, pos += s) std::memcpy(&soa[pos], c.base + i * c.stride, s);
       }
       const auto uncompressed = static_cast<std::uint32_t>(soa.size());
       // LZF's worst case grows the input by one byte per 32 literals.

@@ -14,7 +14,6 @@
 namespace plumb::io {
 namespace {
 
-using cloud_detail::append_number;
 using cloud_detail::convert_value;
 using cloud_detail::LineCursor;
 using cloud_detail::load;
@@ -423,56 +422,37 @@ PointCloud read_ply(const std::string& path) {
 
 std::string write_ply_buffer(const PointCloud& cloud, const PlyWriteSettings& settings) {
   cloud.check_consistent("write_ply");
-  struct Out {
-    const char* name;
-    char type;  // 'F' float32, 'U' uint16, 'I' int32
-  };
-  std::vector<Out> props = {{"x", 'F'}, {"y", 'F'}, {"z", 'F'}};
-  if (cloud.has_normals()) props.insert(props.end(), {{"nx", 'F'}, {"ny", 'F'}, {"nz", 'F'}});
-  if (cloud.has_intensities()) props.push_back({"intensity", 'F'});
-  if (cloud.has_rings()) props.push_back({"ring", 'U'});
-  if (cloud.has_times()) props.push_back({"time", 'F'});
-  if (cloud.has_labels()) props.push_back({"label", 'I'});
+  const std::vector<cloud_detail::OutColumn> cols = cloud_detail::out_columns(cloud, true);
   const std::size_t n = cloud.size();
   const bool ascii = settings.encoding == PlyEncoding::kAscii;
 
   std::string out = "ply\nformat ";
   out += ascii ? "ascii" : "binary_little_endian";
   out += " 1.0\ncomment written by plumb\nelement vertex " + std::to_string(n) + "\n";
-  for (const Out& p : props) out += std::string("property ") + type_name(p.type) + " " + p.name + "\n";
+  for (const auto& c : cols) out += std::string("property ") + type_name(c.type) + " " + c.name + "\n";
   out += "end_header\n";
 
-  // Value k of point i, as the bytes of its stored type.
-  auto value_ptr = [&](std::size_t k, std::size_t i) -> const void* {
-    const std::string_view nm = props[k].name;
-    if (k < 3) return &cloud.points[i][static_cast<int>(k)];
-    if (nm == "nx") return &cloud.normals[i].x();
-    if (nm == "ny") return &cloud.normals[i].y();
-    if (nm == "nz") return &cloud.normals[i].z();
-    if (nm == "intensity") return &cloud.intensities[i];
-    if (nm == "ring") return &cloud.rings[i];
-    if (nm == "time") return &cloud.times[i];
-    return &cloud.labels[i];
-  };
-  out.reserve(out.size() + n * props.size() * (ascii ? 12 : 4));
-  for (std::size_t i = 0; i < n; ++i) {
-    for (std::size_t k = 0; k < props.size(); ++k) {
-      const void* p = value_ptr(k, i);
-      const char t = props[k].type;
-      if (ascii) {
+  if (ascii) {
+    out.reserve(out.size() + n * cols.size() * 12);
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t k = 0; k < cols.size(); ++k) {
         if (k > 0) out += ' ';
-        if (t == 'F') {
-          append_number(out, *static_cast<const float*>(p));
-        } else if (t == 'U') {
-          append_number(out, *static_cast<const std::uint16_t*>(p));
-        } else {
-          append_number(out, *static_cast<const std::int32_t*>(p));
-        }
-      } else {
-        out.append(static_cast<const char*>(p), t == 'U' ? 2 : 4);
+        cloud_detail::append_column_value(out, cols[k], i);
       }
+      out += '\n';
     }
-    if (ascii) out += '\n';
+    return out;
+  }
+  std::size_t record = 0;
+  for (const auto& c : cols) record += static_cast<std::size_t>(c.size);
+  const std::size_t start = out.size();
+  out.resize(start + n * record);
+  std::size_t offset = 0;
+  for (const auto& c : cols) {
+    const std::size_t s = static_cast<std::size_t>(c.size);
+    char* dst = &out[start + offset];
+    for (std::size_t i = 0; i < n; ++i) std::memcpy(dst + i * record, c.base + i * c.stride, s);
+    offset += s;
   }
   return out;
 }
