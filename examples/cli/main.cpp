@@ -19,6 +19,7 @@ namespace plumb::cli {
 void register_eval_command(CLI::App& app);
 void register_calibrate_command(CLI::App& app);
 void register_ifc_commands(CLI::App& app);
+void register_scan2d_command(CLI::App& app);
 }  // namespace plumb::cli
 
 int main(int argc, char** argv) {
@@ -30,6 +31,7 @@ int main(int argc, char** argv) {
   plumb::cli::register_eval_command(app);
   plumb::cli::register_calibrate_command(app);
   plumb::cli::register_ifc_commands(app);
+  plumb::cli::register_scan2d_command(app);
 
   try {
     app.parse(argc, argv);

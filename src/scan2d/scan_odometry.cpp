@@ -1,0 +1,120 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "plumb/scan2d/scan_odometry.hpp"
+
+#include <chrono>
+#include <cmath>
+
+#include "plumb/core/error.hpp"
+
+namespace plumb {
+
+ScanOdometry::ScanOdometry(const ScanOdometrySettings& settings) : settings_(settings) {
+  PLUMB_CHECK(settings.local_map_size >= 1, "ScanOdometry: local_map_size must be >= 1");
+}
+
+void ScanOdometry::add_keyframe(const LaserScan& scan, const Pose2& T_world_laser) {
+  keyframes_.push_back({scan, T_world_laser});
+  while (keyframes_.size() > settings_.local_map_size) keyframes_.pop_front();
+  // The local map lives in the newest keyframe's laser frame.
+  const Pose2 T_kf_world = keyframes_.back().T_world_laser.ominus();
+  std::vector<const LaserScan*> scans;
+  std::vector<Pose2> poses;
+  for (const Keyframe& k : keyframes_) {
+    scans.push_back(&k.scan);
+    poses.push_back(T_kf_world.oplus(k.T_world_laser));
+  }
+  map_ = PlicpReference(scans, poses, settings_.reference);
+}
+
+ScanOdometryStep ScanOdometry::add(const LaserScan& scan, const Pose2& odom_pose) {
+  PLUMB_CHECK(std::isfinite(odom_pose.x) && std::isfinite(odom_pose.y) && std::isfinite(odom_pose.theta),
+              "ScanOdometry::add: odometry pose is not finite");
+  scan.check_consistent("ScanOdometry::add");
+  const Pose2& l = settings_.T_base_laser;
+  ScanOdometryStep step;
+  if (!started_) {
+    started_ = true;
+    T_world_base_ = odom_pose;
+    last_odom_ = odom_pose;
+    add_keyframe(scan, T_world_base_.oplus(l));
+    step.T_world_base = T_world_base_;
+    return step;
+  }
+  // Prediction from wheel odometry (SEEDS A3.3 (1)-(2)).
+  const Pose2 odom_motion = last_odom_.ominus().oplus(odom_pose);
+  last_odom_ = odom_pose;
+  const Pose2 T_world_laser_guess = T_world_base_.oplus(odom_motion).oplus(l);
+  const Pose2& T_world_kf = keyframes_.back().T_world_laser;
+  const Pose2 T_kf_cur_guess = T_world_kf.ominus().oplus(T_world_laser_guess);
+
+  const auto t0 = std::chrono::steady_clock::now();
+  step.match = plicp(scan, map_, T_kf_cur_guess, settings_.plicp);
+  step.match_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+
+  const PlicpResult& m = step.match;
+  const Pose2 dev = T_kf_cur_guess.ominus().oplus(m.T_ref_cur);
+  const bool good = (m.status == Status::kOk || m.status == Status::kNotConverged) &&
+                    m.valid_fraction >= settings_.min_valid_fraction &&
+                    std::sqrt(m.mse) <= settings_.max_rmse &&
+                    std::hypot(dev.x, dev.y) <= settings_.max_prior_deviation_xy &&
+                    std::abs(wrap_angle(dev.theta)) <= settings_.max_prior_deviation_theta;
+  Pose2 T_kf_cur = T_kf_cur_guess;
+  if (good) {
+    T_kf_cur = m.T_ref_cur;
+    step.mode = ScanMatchMode::kMatched;
+    if (m.degenerate && settings_.prior_along_degenerate_direction) {
+      // Replace the match's component along the weak direction (normalized x, y, L theta) by the prior's.
+      const double L = m.characteristic_length;
+      Vector3d delta(m.T_ref_cur.x - T_kf_cur_guess.x, m.T_ref_cur.y - T_kf_cur_guess.y,
+                     L * wrap_angle(m.T_ref_cur.theta - T_kf_cur_guess.theta));
+      delta -= delta.dot(m.weakest_direction) * m.weakest_direction;
+      T_kf_cur = Pose2{T_kf_cur_guess.x + delta.x(), T_kf_cur_guess.y + delta.y(),
+                       T_kf_cur_guess.theta + delta.z() / L};
+      step.mode = ScanMatchMode::kDegenerate;
+    }
+  } else {
+    step.mode = ScanMatchMode::kFallback;
+  }
+  const Pose2 T_world_laser = T_world_kf.oplus(T_kf_cur);
+  T_world_base_ = T_world_laser.oplus(l.ominus());
+  T_world_base_.theta = wrap_angle(T_world_base_.theta);
+  step.T_world_base = T_world_base_;
+
+  const Pose2 since_kf = T_world_kf.ominus().oplus(T_world_laser);
+  if (std::hypot(since_kf.x, since_kf.y) >= settings_.keyframe_distance ||
+      std::abs(wrap_angle(since_kf.theta)) >= settings_.keyframe_angle) {
+    add_keyframe(scan, T_world_laser);
+  }
+  return step;
+}
+
+ScanOdometryResult run_scan_odometry(const std::vector<LaserScan>& scans,
+                                     const std::vector<Pose2>& odometry,
+                                     const ScanOdometrySettings& settings) {
+  PLUMB_CHECK(scans.size() == odometry.size(), "run_scan_odometry: " << scans.size() << " scans but "
+                                                   << odometry.size() << " odometry poses");
+  ScanOdometry so(settings);
+  ScanOdometryResult r;
+  double sum_it = 0.0, sum_ms = 0.0;
+  std::size_t attempts = 0;
+  for (std::size_t k = 0; k < scans.size(); ++k) {
+    const ScanOdometryStep s = so.add(scans[k], odometry[k]);
+    r.poses.push_back(s.T_world_base);
+    r.modes.push_back(s.mode);
+    r.iterations.push_back(s.match.iterations);
+    if (s.mode == ScanMatchMode::kInitial) continue;
+    ++attempts;
+    sum_it += s.match.iterations;
+    sum_ms += s.match_ms;
+    if (s.mode == ScanMatchMode::kFallback) ++r.num_fallbacks;
+    else ++r.num_matched;
+    if (s.mode == ScanMatchMode::kDegenerate) ++r.num_degenerate;
+  }
+  if (attempts > 0) {
+    r.mean_iterations = sum_it / static_cast<double>(attempts);
+    r.mean_match_ms = sum_ms / static_cast<double>(attempts);
+  }
+  return r;
+}
+
+}  // namespace plumb
