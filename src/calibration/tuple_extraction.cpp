@@ -32,6 +32,16 @@ std::optional<Vector2d> interpolate_wheel_angles(const std::vector<WheelEncoderR
   return Vector2d(a.left + alpha * (b.left - a.left), a.right + alpha * (b.right - a.right));
 }
 
+ScanMatcher plicp_scan_matcher(const PlicpSettings& settings, bool accept_degenerate) {
+  return [settings, accept_degenerate](const LaserScan& reference, const LaserScan& current,
+                                       const Pose2& guess) -> std::optional<Pose2> {
+    const PlicpReference ref(reference);
+    const PlicpResult r = plicp(current, ref, guess, settings);
+    if (r.status != Status::kOk || (r.degenerate && !accept_degenerate)) return std::nullopt;
+    return r.T_ref_cur;
+  };
+}
+
 TupleExtractionResult extract_calibration_tuples(const std::vector<LaserScan>& scans,
                                                  const std::vector<WheelEncoderReading>& wheels,
                                                  const ScanMatcher& matcher,

@@ -21,6 +21,7 @@
 #include "plumb/calibration/odometry_laser.hpp"
 #include "plumb/core/status.hpp"
 #include "plumb/scan2d/laser_scan.hpp"
+#include "plumb/scan2d/plicp.hpp"
 
 namespace plumb {
 
@@ -40,6 +41,12 @@ struct WheelEncoderReading {
 ///        nothing when the match failed. `guess` is the predicted motion.
 using ScanMatcher = std::function<std::optional<Pose2>(const LaserScan& reference, const LaserScan& current,
                                                        const Pose2& guess)>;
+
+/// @brief A ScanMatcher running PLICP (plumb/scan2d/plicp.hpp) of the later scan against the
+///        earlier one from the guess. It accepts only Status::kOk matches, and refuses matches
+///        flagged degenerate (corridors) unless accept_degenerate: a calibration tuple with a wrong
+///        laser motion costs more than a missing one.
+ScanMatcher plicp_scan_matcher(const PlicpSettings& settings = {}, bool accept_degenerate = false);
 
 /// @brief Settings of extract_calibration_tuples().
 struct TupleExtractionSettings {
