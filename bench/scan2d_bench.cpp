@@ -1,0 +1,58 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// PLICP speed: ms per match on consecutive scans of the intel-corrected CARMEN log (180 beams),
+// with the raw-odometry prior as first guess, as in scan-matching odometry.
+
+#include <string>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+
+#include "plumb/io/carmen.hpp"
+#include "plumb/scan2d/plicp.hpp"
+
+namespace {
+
+struct Pairs {
+  std::vector<plumb::PlicpReference> refs;
+  std::vector<std::vector<plumb::Vector2d>> currents;
+  std::vector<plumb::Pose2> guesses;
+};
+
+const Pairs* load(const std::string& name) {
+  static Pairs pairs;
+  static bool loaded = false;
+  if (loaded) return pairs.refs.empty() ? nullptr : &pairs;
+  loaded = true;
+  try {
+    const auto log = plumb::io::read_carmen(std::string(PLUMB_DATA_DIR) + "/laser2d/carmen_corrected/" + name);
+    const auto odom = plumb::io::raw_odometry_at_lasers(log);
+    for (std::size_t k = 1; k < log.lasers.size(); ++k) {
+      pairs.refs.emplace_back(log.lasers[k - 1].scan);
+      pairs.currents.push_back(log.lasers[k].scan.to_points());
+      pairs.guesses.push_back(odom[k - 1].ominus().oplus(odom[k]));
+    }
+  } catch (const plumb::Error&) {
+    return nullptr;
+  }
+  return &pairs;
+}
+
+void BM_PlicpIntel(benchmark::State& state) {
+  const Pairs* p = load("intel-corrected.log.gz");
+  if (p == nullptr) {
+    state.SkipWithError("intel-corrected.log.gz not found (PLUMB_DATA_DIR)");
+    return;
+  }
+  std::size_t k = 0;
+  for (auto _ : state) {
+    const auto r = plumb::plicp(p->currents[k], p->refs[k], p->guesses[k]);
+    benchmark::DoNotOptimize(r.T_ref_cur.x);
+    k = (k + 1) % p->refs.size();
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations()));
+}
+BENCHMARK(BM_PlicpIntel)->Name("plicp/plumb/intel")->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();
