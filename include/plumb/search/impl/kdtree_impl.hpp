@@ -188,6 +188,7 @@ void KdTree<Dim>::build() {
     max_depth_ = std::max<std::size_t>(max_depth_, t.depth);
     nodes_.push_back(Node{t.begin, t.end, 0.0f, 0.0f, kLeaf});  // a leaf unless split below
     if (t.is_right) nodes_[t.parent].a = id;
+    if (t.end - t.begin <= leaf_size) continue;  // a leaf (its task carries no box)
 
     // Widest dimension of the (tight) bounding box.
     int dim = 0;
@@ -203,10 +204,9 @@ void KdTree<Dim>::build() {
       nodes_[id].dim = kCoincidentLeaf;
       continue;
     }
-    if (t.end - t.begin <= leaf_size) continue;
 
-    // Midpoint of the tight box: both sides are non-empty because the box is tight. When the
-    // midpoint rounds onto the low end (adjacent floats), split at the high end instead.
+    // Mean (or midpoint) along dim lies in [lo, hi] of the tight box, so "coordinate < split"
+    // leaves both sides non-empty unless split rounds onto lo (or past hi): then split at hi.
     const float lo = t.box.lo[dim];
     const float hi = t.box.hi[dim];
     float split = 0.5f * lo + 0.5f * hi;
@@ -234,8 +234,17 @@ void KdTree<Dim>::build() {
     std::copy(scratch_ids.data(), scratch_ids.data() + count, ids + t.begin);
     const std::uint32_t mid = t.begin + num_left;
 
-    const Box left = tight_box(t.begin, mid);
-    const Box right = tight_box(mid, t.end);
+    // A child that will be a leaf needs only its bound along `dim` (for this node's lo / hi).
+    auto child_box = [&](std::uint32_t begin, std::uint32_t end) {
+      if (end - begin > leaf_size) return tight_box(begin, end);
+      Box box{};
+      box.lo[dim] = std::numeric_limits<float>::infinity();
+      box.hi[dim] = -std::numeric_limits<float>::infinity();
+      detail::min_max_sum(c[dim] + begin, end - begin, box.lo[dim], box.hi[dim], box.sum[dim]);
+      return box;
+    };
+    const Box left = child_box(t.begin, mid);
+    const Box right = child_box(mid, t.end);
     Node& node = nodes_[id];
     node.a = 0;  // right child, patched when it is created
     node.b = 0;
