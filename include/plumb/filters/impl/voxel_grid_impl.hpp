@@ -97,9 +97,11 @@ class VoxelKeyer {
       const std::int64_t ty = static_cast<std::int64_t>(qy);
       const std::int64_t tz = static_cast<std::int64_t>(qz);
       // |frac - 0.5| < 0.5 - tol  <=>  tol < frac < 1 - tol: no integer within tol of q.
-      const bool safe = (std::abs(qx - static_cast<double>(tx) - 0.5) < half_minus_tol_[0]) &
-                        (std::abs(qy - static_cast<double>(ty) - 0.5) < half_minus_tol_[1]) &
-                        (std::abs(qz - static_cast<double>(tz) - 0.5) < half_minus_tol_[2]);
+      // (int & int: one branch for the three axes)
+      const int safe =
+          static_cast<int>(std::abs(qx - static_cast<double>(tx) - 0.5) < half_minus_tol_[0]) &
+          static_cast<int>(std::abs(qy - static_cast<double>(ty) - 0.5) < half_minus_tol_[1]) &
+          static_cast<int>(std::abs(qz - static_cast<double>(tz) - 0.5) < half_minus_tol_[2]);
       if (safe) {
         return static_cast<std::uint64_t>(tx) + layout_.stride_y * static_cast<std::uint64_t>(ty) +
                layout_.stride_z * static_cast<std::uint64_t>(tz);
