@@ -187,7 +187,7 @@ void check_random_clouds() {
       plumb::Rng rng(seed * 7919);
       const std::string what = "Dim=" + std::to_string(Dim) + " n=" + std::to_string(n) +
                                (shape == Shape::kUniform ? " uniform" : " clusters");
-      const int num_queries = n >= 1000 ? 30 : 12;
+      const int num_queries = n >= 1000 ? 16 : 12;
       for (int qi = 0; qi < num_queries; ++qi) {
         // Half the queries on data points (exact hits, ties with duplicates), half random.
         const auto q = qi % 2 == 0 ? pts[rng.uniform_index(n)] : random_query<Dim>(rng, 14.0);

@@ -100,6 +100,7 @@ class BruteForceSearch {
   std::vector<Neighbor> collect(const Point& query, float max_dist_sq) const {
     std::vector<Neighbor> out;
     if (!query.allFinite()) return out;
+    out.reserve(max_dist_sq == std::numeric_limits<float>::infinity() ? points_.size() : 16);
     for (std::size_t i = 0; i < points_.size(); ++i) {
       if (!points_[i].allFinite()) continue;
       const float d = detail::dist_sq<Dim>(points_[i].data(), query.data());
