@@ -41,7 +41,7 @@ Pose2 brute_force_minimum(const std::vector<PointToLinePair>& pairs) {
   };
   Pose2 best = best_at(0.0);
   double best_cost = cost(pairs, best);
-  const int n = 20000;
+  const int n = 720;  // 0.5 deg grid, then local refinement
   for (int i = 0; i < n; ++i) {
     const Pose2 T = best_at(-kPi + 2 * kPi * i / n);
     const double c = cost(pairs, T);

@@ -66,24 +66,29 @@ LogRun run_log(const std::string& path, std::size_t max_scans, const ScanOdometr
   return run;
 }
 
+// Sanitizer builds run ~100x slower: they check the first scans only against raw odometry, and
+// the absolute thresholds (measured on the whole logs) apply to the full runs.
 #if defined(__SANITIZE_ADDRESS__)
-constexpr std::size_t kFreiburgScans = 1200;  // keep the sanitizer run short
+constexpr bool kFullRun = false;
+constexpr std::size_t kMaxScans = 150;
 #else
-constexpr std::size_t kFreiburgScans = std::numeric_limits<std::size_t>::max();
+constexpr bool kFullRun = true;
+constexpr std::size_t kMaxScans = std::numeric_limits<std::size_t>::max();
 #endif
 
 // CSM (sm2, defaults, same raw-odometry prior) on intel: consecutive 3.9 cm / 0.59 deg,
 // 10-scan 17.2 cm / 2.26 deg. Thresholds sit a little above what we measure and below CSM.
 TEST(ScanOdometryTest, IntelBeatsOdometryAndCsm) {
   PLUMB_REQUIRE_DATA(path, "laser2d/carmen_corrected/intel-corrected.log.gz");
-  const LogRun r = run_log(path, std::numeric_limits<std::size_t>::max(), {});
+  const LogRun r = run_log(path, kMaxScans, {});
+  EXPECT_LT(r.sm1.trans_cm, 0.5 * r.odom1.trans_cm);
+  EXPECT_LT(r.sm10.rot_deg, 0.5 * r.odom10.rot_deg);
+  if (!kFullRun) return;
   EXPECT_GT(r.odom1.trans_cm, 7.5);  // sanity of the reference: raw odometry is as bad as reported
   EXPECT_LT(r.sm1.trans_cm, 3.3);
   EXPECT_LT(r.sm1.rot_deg, 0.55);
   EXPECT_LT(r.sm10.trans_cm, 10.0);
   EXPECT_LT(r.sm10.rot_deg, 1.35);
-  EXPECT_LT(r.sm1.trans_cm, 0.5 * r.odom1.trans_cm);
-  EXPECT_LT(r.sm10.rot_deg, 0.5 * r.odom10.rot_deg);
   EXPECT_LT(r.result.num_fallbacks, 20u);
   EXPECT_EQ(r.result.poses.size(), 910u);
 }
@@ -92,24 +97,25 @@ TEST(ScanOdometryTest, IntelWithLocalMap) {
   PLUMB_REQUIRE_DATA(path, "laser2d/carmen_corrected/intel-corrected.log.gz");
   ScanOdometrySettings s;
   s.local_map_size = 10;
-  const LogRun r = run_log(path, std::numeric_limits<std::size_t>::max(), s);
-  // Measured 3.2-3.3 cm / 0.52-0.54 deg and 8.5-11.3 cm / 0.97-1.12 deg (varies with compiler
-  // flags: near-threshold keyframe/gate decisions); still well below CSM's 17.2 cm / 2.26 deg.
-  EXPECT_LT(r.sm1.trans_cm, 3.6);
-  EXPECT_LT(r.sm1.rot_deg, 0.58);
-  EXPECT_LT(r.sm10.trans_cm, 12.5);
-  EXPECT_LT(r.sm10.rot_deg, 1.3);
+  if (!kFullRun) GTEST_SKIP() << "full-log accuracy run skipped under sanitizers";
+  const LogRun r = run_log(path, kMaxScans, s);
+  // Measured 3.22 cm / 0.518 deg and 8.52 cm / 0.973 deg.
+  EXPECT_LT(r.sm1.trans_cm, 3.4);
+  EXPECT_LT(r.sm1.rot_deg, 0.55);
+  EXPECT_LT(r.sm10.trans_cm, 9.0);
+  EXPECT_LT(r.sm10.rot_deg, 1.05);
 }
 
 TEST(ScanOdometryTest, Freiburg079BeatsOdometry) {
   PLUMB_REQUIRE_DATA(path, "laser2d/carmen_corrected/freiburg-079-corrected.log.gz");
-  const LogRun r = run_log(path, kFreiburgScans, {});
+  const LogRun r = run_log(path, kMaxScans, {});
+  EXPECT_LT(r.sm1.rot_deg, 0.5 * r.odom1.rot_deg);
+  EXPECT_LT(r.sm10.rot_deg, 0.6 * r.odom10.rot_deg);
+  if (!kFullRun) return;
   EXPECT_LT(r.sm1.trans_cm, 2.8);
   EXPECT_LT(r.sm1.rot_deg, 0.58);
   EXPECT_LT(r.sm10.trans_cm, 4.0);
   EXPECT_LT(r.sm10.rot_deg, 0.9);
-  EXPECT_LT(r.sm1.rot_deg, 0.5 * r.odom1.rot_deg);
-  EXPECT_LT(r.sm10.rot_deg, 0.6 * r.odom10.rot_deg);
 }
 
 TEST(ScanOdometryTest, FallsBackToOdometryOnGarbage) {
