@@ -2,7 +2,8 @@
 #pragma once
 
 /// @file
-/// @brief Umbrella header: the whole public API of plumb.
+/// @brief Umbrella header: the whole public API of plumb (tests/core/umbrella_test.cpp checks that
+/// every public header is listed here).
 
 #include "plumb/version.hpp"
 
@@ -22,9 +23,27 @@
 #include "plumb/filters/crop.hpp"
 #include "plumb/filters/voxel_grid.hpp"
 
+#include "plumb/io/calib_tuples.hpp"
+#include "plumb/io/carmen.hpp"
+#include "plumb/io/cloud_io.hpp"
+#include "plumb/io/kitti_bin.hpp"
 #include "plumb/io/pcd.hpp"
+#include "plumb/io/ply.hpp"
 #include "plumb/io/trajectory.hpp"
 
 #include "plumb/eval/align.hpp"
 #include "plumb/eval/kitti_segments.hpp"
 #include "plumb/eval/metrics.hpp"
+
+#include "plumb/scan2d/laser_scan.hpp"
+#include "plumb/scan2d/plicp.hpp"
+#include "plumb/scan2d/scan_odometry.hpp"
+
+#include "plumb/calibration/odometry_laser.hpp"
+#include "plumb/calibration/tuple_extraction.hpp"
+
+#include "plumb/bim/ifc.hpp"
+#include "plumb/bim/mesh.hpp"
+#include "plumb/bim/polygon.hpp"
+#include "plumb/bim/sample.hpp"
+#include "plumb/bim/step.hpp"
