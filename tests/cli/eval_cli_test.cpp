@@ -15,58 +15,18 @@
 #include "plumb/core/lie.hpp"
 #include "plumb/io/trajectory.hpp"
 #include "plumb/version.hpp"
+#include "cli_runner.hpp"
 #include "test_data.hpp"
 
 namespace plumb {
 namespace {
 
-struct RunResult {
-  int exit_code = -1;
-  std::string out, err;
-};
+using test::CliTest;
+using test::json_number;
+using test::read_text;
+using test::RunResult;
 
-std::string read_text(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-std::string binary() { return std::string(PLUMB_BINARY_DIR) + "/examples/plumb"; }
-
-RunResult run(const std::string& args) {
-  // Per-test names: ctest may run the tests of this binary in parallel.
-  const std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
-  const std::string out = test::temp_path("cli_" + name + "_stdout.txt");
-  const std::string err = test::temp_path("cli_" + name + "_stderr.txt");
-  const std::string command = "'" + binary() + "' " + args + " >'" + out + "' 2>'" + err + "'";
-  const int status = std::system(command.c_str());
-  RunResult r;
-  if (status != -1 && WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
-  r.out = read_text(out);
-  r.err = read_text(err);
-  return r;
-}
-
-// The number after "key": inside the JSON object that is the value of "object" (the whole text
-// when `object` is empty). Enough for flat stats objects; NaN when absent.
-double json_number(const std::string& text, const std::string& object, const std::string& key) {
-  std::size_t begin = 0, end = text.size();
-  if (!object.empty()) {
-    begin = text.find("\"" + object + "\":");
-    if (begin == std::string::npos) return std::numeric_limits<double>::quiet_NaN();
-    begin = text.find('{', begin);
-    end = text.find('}', begin);
-  }
-  const std::size_t k = text.find("\"" + key + "\"", begin);
-  if (k == std::string::npos || k > end) return std::numeric_limits<double>::quiet_NaN();
-  return std::strtod(text.c_str() + text.find(':', k) + 1, nullptr);
-}
-
-class CliTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    if (!test::file_exists(binary())) GTEST_SKIP() << "plumb CLI not built: " << binary();
-  }
-};
+RunResult run(const std::string& args) { return test::run_cli(args); }
 
 TEST_F(CliTest, HelpListsSubcommands) {
   const RunResult r = run("--help");

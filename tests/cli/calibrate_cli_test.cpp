@@ -1,6 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // `plumb calibrate`: runs the built binary (${PLUMB_BINARY_DIR}/examples/plumb) as a user would;
-// skipped when the CLI has not been built.
 
 #include <sys/wait.h>
 
@@ -13,47 +12,21 @@
 
 #include <gtest/gtest.h>
 
+#include "cli_runner.hpp"
 #include "test_data.hpp"
 
 namespace {
 
-struct RunResult {
-  int exit_code = -1;
-  std::string out, err;
-};
+using plumb::test::read_text;
+using plumb::test::RunResult;
 
-std::string read_text(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-std::string binary() { return std::string(PLUMB_BINARY_DIR) + "/examples/plumb"; }
-
-RunResult run(const std::string& args) {
-  const std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
-  const std::string out = plumb::test::temp_path("calib_cli_" + name + "_stdout.txt");
-  const std::string err = plumb::test::temp_path("calib_cli_" + name + "_stderr.txt");
-  const std::string command = "'" + binary() + "' " + args + " >'" + out + "' 2>'" + err + "'";
-  const int status = std::system(command.c_str());
-  RunResult r;
-  if (status != -1 && WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
-  r.out = read_text(out);
-  r.err = read_text(err);
-  return r;
-}
+RunResult run(const std::string& args) { return plumb::test::run_cli(args); }
 
 double json_number(const std::string& text, const std::string& key) {
-  const std::size_t k = text.find("\"" + key + "\":");
-  if (k == std::string::npos) return std::numeric_limits<double>::quiet_NaN();
-  return std::strtod(text.c_str() + k + key.size() + 3, nullptr);
+  return plumb::test::json_number(text, "", key);
 }
 
-class CalibrateCliTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    if (!plumb::test::file_exists(binary())) GTEST_SKIP() << "plumb CLI not built: " << binary();
-  }
-};
+using CalibrateCliTest = plumb::test::CliTest;
 
 TEST_F(CalibrateCliTest, JsonMatchesCensiResult) {
   PLUMB_REQUIRE_DATA(tuples, "laser2d/calibration_censi/l90_1.tuple");
