@@ -24,6 +24,14 @@ TEST(ErrorTest, CheckThrowsWithStreamedMessageAndPlace) {
   } catch (const Error& e) {
     const std::string what = e.what();
     EXPECT_NE(what.find("file.pcd:12: expected 4, got 3"), std::string::npos) << what;
+    EXPECT_EQ(what, "file.pcd:12: expected 4, got 3");
+  }
+  try {
+    PLUMB_CHECK(n == 5, "");
+    FAIL() << "PLUMB_CHECK did not throw";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("n == 5"), std::string::npos) << what;
     EXPECT_NE(what.find("core_types_test.cpp"), std::string::npos) << what;
   }
   EXPECT_NO_THROW(PLUMB_CHECK(n == 3, "never"));

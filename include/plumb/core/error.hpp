@@ -18,10 +18,11 @@ class Error : public std::runtime_error {
 namespace detail {
 [[noreturn]] inline void throw_check_failure(const char* condition, const char* file, int line,
                                              const std::string& message) {
+  // A message names the input and the place in it, which is what a user needs; the source
+  // location is added only for a bare check, where it is the only clue.
+  if (!message.empty()) throw Error(message);
   std::ostringstream os;
-  os << message;
-  if (message.empty()) os << "check failed: " << condition;
-  os << " [" << file << ':' << line << ']';
+  os << "check failed: " << condition << " [" << file << ':' << line << ']';
   throw Error(os.str());
 }
 }  // namespace detail
