@@ -9,13 +9,14 @@
 #include <string>
 #include <utility>
 
+#include "bench_data.hpp"
 #include "plumb/bim/mesh.hpp"
 #include "plumb/bim/sample.hpp"
 
 namespace {
 
 std::string slurp(const std::string& relative) {
-  std::ifstream in(std::string(PLUMB_DATA_DIR) + "/" + relative, std::ios::binary);
+  std::ifstream in(plumb::bench::data_path(relative), std::ios::binary);
   std::ostringstream ss;
   ss << in.rdbuf();
   return ss.str();

@@ -25,18 +25,13 @@
 #include <open3d/geometry/PointCloud.h>
 #endif
 
+#include "bench_data.hpp"
+
 namespace {
 
 constexpr double kLeaf = 0.1;  // [m]
 
-std::string data_dir() {
-  if (const char* env = std::getenv("PLUMB_DATA_DIR"); env != nullptr && *env != '\0') return env;
-#ifdef PLUMB_DATA_DIR
-  return PLUMB_DATA_DIR;
-#else
-  return "";
-#endif
-}
+using plumb::bench::data_dir;
 
 const std::map<std::string, std::string>& datasets() {
   static const std::map<std::string, std::string> d = {

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <string>
 
+#include "bench_data.hpp"
 #include "plumb/io/pcd.hpp"
 
 #ifdef PLUMB_BENCH_HAVE_PCL
@@ -84,7 +85,7 @@ void read_open3d(benchmark::State& state, const std::string& path) {
 
 int register_all() {
   for (const Dataset& d : kDatasets) {
-    const std::string path = std::string(PLUMB_DATA_DIR) + "/" + d.relative;
+    const std::string path = plumb::bench::data_path(d.relative);
     if (!exists(path)) continue;
     const std::string suffix = std::string("/") + d.name;
     benchmark::RegisterBenchmark(("pcd_read/plumb" + suffix).c_str(), read_plumb, path)->Unit(benchmark::kMillisecond);

@@ -7,6 +7,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include "bench_data.hpp"
 #include "plumb/io/carmen.hpp"
 #include "plumb/scan2d/plicp.hpp"
 
@@ -24,7 +25,7 @@ const Pairs* load(const std::string& name) {
   if (loaded) return pairs.refs.empty() ? nullptr : &pairs;
   loaded = true;
   try {
-    const auto log = plumb::io::read_carmen(std::string(PLUMB_DATA_DIR) + "/laser2d/carmen_corrected/" + name);
+    const auto log = plumb::io::read_carmen(plumb::bench::data_path("laser2d/carmen_corrected/" + name));
     const auto odom = plumb::io::raw_odometry_at_lasers(log);
     for (std::size_t k = 1; k < log.lasers.size(); ++k) {
       pairs.refs.emplace_back(log.lasers[k - 1].scan);

@@ -30,6 +30,8 @@
 #include <open3d/geometry/KDTreeFlann.h>
 #endif
 
+#include "bench_data.hpp"
+
 namespace {
 
 constexpr std::size_t kNumQueries = 20000;
@@ -42,14 +44,7 @@ plumb::KdTreeSettings plumb_settings() {
   return settings;
 }
 
-std::string data_dir() {
-  if (const char* env = std::getenv("PLUMB_DATA_DIR"); env != nullptr && *env != '\0') return env;
-#ifdef PLUMB_DATA_DIR
-  return PLUMB_DATA_DIR;
-#else
-  return ".";
-#endif
-}
+using plumb::bench::data_dir;
 
 struct Dataset {
   std::string name;

@@ -12,59 +12,18 @@
 #include <string>
 #include <vector>
 
+#include "io/io_test_util.hpp"
 #include "test_data.hpp"
 
 namespace plumb::io {
 namespace {
 
+using plumb::test::expect_error;
+using plumb::test::expect_same_cloud;
+using plumb::test::same_float;
 using plumb::test::temp_path;
 
 PointCloud read_string(const std::string& bytes) { return read_ply_buffer(bytes.data(), bytes.size(), "mem.ply"); }
-
-template <class Fn>
-void expect_error(Fn&& fn, const std::vector<std::string>& fragments) {
-  try {
-    fn();
-    ADD_FAILURE() << "expected plumb::Error";
-  } catch (const Error& e) {
-    const std::string msg = e.what();
-    for (const auto& f : fragments) EXPECT_NE(msg.find(f), std::string::npos) << "'" << f << "' not in: " << msg;
-  }
-}
-
-bool same_float(float a, float b) {
-  if (std::isnan(a) || std::isnan(b)) return std::isnan(a) && std::isnan(b);
-  return std::memcmp(&a, &b, sizeof(float)) == 0;
-}
-
-void expect_same_cloud(const PointCloud& a, const PointCloud& b) {
-  ASSERT_EQ(a.size(), b.size());
-  ASSERT_EQ(a.normals.size(), b.normals.size());
-  ASSERT_EQ(a.intensities.size(), b.intensities.size());
-  ASSERT_EQ(a.rings.size(), b.rings.size());
-  ASSERT_EQ(a.times.size(), b.times.size());
-  ASSERT_EQ(a.labels.size(), b.labels.size());
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    for (int k = 0; k < 3; ++k) {
-      ASSERT_TRUE(same_float(a.points[i][k], b.points[i][k])) << i;
-      if (a.has_normals()) {
-        ASSERT_TRUE(same_float(a.normals[i][k], b.normals[i][k])) << i;
-      }
-    }
-    if (a.has_intensities()) {
-      ASSERT_TRUE(same_float(a.intensities[i], b.intensities[i])) << i;
-    }
-    if (a.has_times()) {
-      ASSERT_TRUE(same_float(a.times[i], b.times[i])) << i;
-    }
-    if (a.has_rings()) {
-      ASSERT_EQ(a.rings[i], b.rings[i]) << i;
-    }
-    if (a.has_labels()) {
-      ASSERT_EQ(a.labels[i], b.labels[i]) << i;
-    }
-  }
-}
 
 PointCloud make_full_cloud(std::size_t n, unsigned seed) {
   std::mt19937 rng(seed);

@@ -1,0 +1,68 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+/// @file
+/// @brief Helpers shared by the cloud reader/writer tests: bit-exact cloud comparison and
+/// "throws plumb::Error naming these things".
+
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "plumb/core/error.hpp"
+#include "plumb/core/point_cloud.hpp"
+
+namespace plumb::test {
+
+/// @brief Expect plumb::Error whose message contains every fragment.
+template <class Fn>
+void expect_error(Fn&& fn, const std::vector<std::string>& fragments) {
+  try {
+    fn();
+    ADD_FAILURE() << "expected plumb::Error";
+  } catch (const Error& e) {
+    const std::string msg = e.what();
+    for (const auto& f : fragments) EXPECT_NE(msg.find(f), std::string::npos) << "'" << f << "' not in: " << msg;
+  }
+}
+
+/// @brief Bit-exact float equality (distinguishes -0), with NaN equal to NaN.
+inline bool same_float(float a, float b) {
+  if (std::isnan(a) || std::isnan(b)) return std::isnan(a) && std::isnan(b);
+  return std::memcmp(&a, &b, sizeof(float)) == 0;
+}
+
+/// @brief Two clouds hold the same fields with bit-identical values.
+inline void expect_same_cloud(const PointCloud& a, const PointCloud& b) {
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_EQ(a.normals.size(), b.normals.size());
+  ASSERT_EQ(a.intensities.size(), b.intensities.size());
+  ASSERT_EQ(a.rings.size(), b.rings.size());
+  ASSERT_EQ(a.times.size(), b.times.size());
+  ASSERT_EQ(a.labels.size(), b.labels.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      ASSERT_TRUE(same_float(a.points[i][k], b.points[i][k])) << "point " << i << " coord " << k;
+      if (a.has_normals()) {
+        ASSERT_TRUE(same_float(a.normals[i][k], b.normals[i][k])) << "normal " << i;
+      }
+    }
+    if (a.has_intensities()) {
+      ASSERT_TRUE(same_float(a.intensities[i], b.intensities[i])) << "intensity " << i;
+    }
+    if (a.has_times()) {
+      ASSERT_TRUE(same_float(a.times[i], b.times[i])) << "time " << i;
+    }
+    if (a.has_rings()) {
+      ASSERT_EQ(a.rings[i], b.rings[i]) << "ring " << i;
+    }
+    if (a.has_labels()) {
+      ASSERT_EQ(a.labels[i], b.labels[i]) << "label " << i;
+    }
+  }
+}
+
+}  // namespace plumb::test
