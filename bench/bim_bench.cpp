@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // IFC parse + mesh and BIM-cloud sampling. The web-ifc peer (node) is timed by
-// scripts/ifc_golden/webifc_time.mjs on the same files; see bench/README.md for the ratio.
+// scripts/ifc_golden/webifc_bbox.cjs --time N on the same files; see bench/README.md for the ratio.
 
 #include <benchmark/benchmark.h>
 

@@ -69,5 +69,9 @@ fi
 
 step "release tests"
 cd build/ci
-ctest -j"$jobs" --output-on-failure --timeout 900
+ctest -j"$jobs" --output-on-failure --timeout 900 | tee ctest_release.log
+total="$(grep -oE 'tests failed out of [0-9]+' ctest_release.log | grep -oE '[0-9]+$')"
+failed="$(grep -oE '[0-9]+ tests failed out of' ctest_release.log | grep -oE '^[0-9]+')"
 echo "test.sh: done in $((SECONDS - start_time)) s"
+skipped="$(grep -cE '^[[:space:]]+[0-9]+ - .*\(Skipped\)$' ctest_release.log || true)"
+echo "tests: $((total - failed - skipped)) passed, ${failed} failed, ${skipped} skipped"
