@@ -30,6 +30,7 @@ struct KdTree<Dim>::KnnSet {
 
   bool visit(float box_dist) const { return box_dist < worst; }
   bool accepts(float d) const { return d < worst; }
+  bool done() const { return !(worst > 0.0f); }  // k points at distance 0: nothing can enter
   void add(float d, std::uint32_t i) {
     if (!(d < worst)) return;
     std::size_t j = count < k ? count++ : k - 1;
@@ -53,6 +54,7 @@ struct KdTree<Dim>::NnSet {
 
   bool visit(float box_dist) const { return box_dist < best_d; }
   bool accepts(float d) const { return d < best_d; }
+  bool done() const { return !(best_d > 0.0f); }  // distance 0 found: nothing can beat it
   void add(float d, std::uint32_t i) {
     if (d < best_d) {
       best_d = d;
@@ -70,6 +72,7 @@ struct KdTree<Dim>::RadiusSet {
 
   bool visit(float box_dist) const { return box_dist <= r_sq; }
   bool accepts(float d) const { return d <= r_sq; }
+  static bool done() { return false; }
   void add(float d, std::uint32_t i) {
     if (d <= r_sq) {
       idx->push_back(i);
@@ -140,14 +143,16 @@ template <int Dim>
 void KdTree<Dim>::build() {
   const std::size_t n = ids_.size();
   const std::size_t leaf_size = settings_.leaf_size;
-  float* c[Dim];
-  for (int k = 0; k < Dim; ++k) c[k] = coords_.data() + static_cast<std::size_t>(k) * n;
-  std::uint32_t* ids = ids_.data();
-  // Scratch for the out-of-place partition.
-  std::vector<float> scratch(static_cast<std::size_t>(Dim) * n);
-  std::vector<std::uint32_t> scratch_ids(n);
-  float* s[Dim];
-  for (int k = 0; k < Dim; ++k) s[k] = scratch.data() + static_cast<std::size_t>(k) * n;
+  // Two buffers (coordinate columns + ids): a node's points lie in buffer `buf` of its task, its
+  // partition writes them to the same range of the other buffer, where its children find them.
+  std::vector<float> other(static_cast<std::size_t>(Dim) * n);
+  std::vector<std::uint32_t> other_ids(n);
+  float* cols[2][Dim];
+  for (int k = 0; k < Dim; ++k) {
+    cols[0][k] = coords_.data() + static_cast<std::size_t>(k) * n;
+    cols[1][k] = other.data() + static_cast<std::size_t>(k) * n;
+  }
+  std::uint32_t* id_buf[2] = {ids_.data(), other_ids.data()};
 
   struct Box {
     float lo[Dim];
@@ -157,9 +162,10 @@ void KdTree<Dim>::build() {
   struct Task {
     std::uint32_t begin, end, parent, depth;
     bool is_right;
+    int buf;
     Box box;
   };
-  auto tight_box = [&](std::uint32_t begin, std::uint32_t end) {
+  auto tight_box = [&](float* const* c, std::uint32_t begin, std::uint32_t end) {
     Box box;
     for (int k = 0; k < Dim; ++k) {
       box.lo[k] = std::numeric_limits<float>::infinity();
@@ -171,9 +177,12 @@ void KdTree<Dim>::build() {
 
   nodes_.clear();
   nodes_.reserve(2 * (n / std::max<std::size_t>(leaf_size / 2, 1)) + 1);
+  std::vector<std::uint8_t> leaf_buf;  // per node: the buffer holding a leaf's points
+  leaf_buf.reserve(nodes_.capacity());
   std::vector<Task> stack;
   stack.reserve(64);
-  Task root{0, static_cast<std::uint32_t>(n), 0, 0, false, tight_box(0, static_cast<std::uint32_t>(n))};
+  Task root{0, static_cast<std::uint32_t>(n), 0, 0, false, 0,
+            tight_box(cols[0], 0, static_cast<std::uint32_t>(n))};
   max_depth_ = 0;
   for (int k = 0; k < Dim; ++k) {
     box_lo_[k] = root.box.lo[k];
@@ -187,6 +196,7 @@ void KdTree<Dim>::build() {
     const auto id = static_cast<std::uint32_t>(nodes_.size());
     max_depth_ = std::max<std::size_t>(max_depth_, t.depth);
     nodes_.push_back(Node{t.begin, t.end, 0.0f, 0.0f, kLeaf});  // a leaf unless split below
+    leaf_buf.push_back(static_cast<std::uint8_t>(t.buf));
     if (t.is_right) nodes_[t.parent].a = id;
     if (t.end - t.begin <= leaf_size) continue;  // a leaf (its task carries no box)
 
@@ -216,31 +226,31 @@ void KdTree<Dim>::build() {
     if (!(split > lo) || split > hi) split = hi;
 
     // Branch-free out-of-place partition on coordinate < split: every point is written to the
-    // next free slot of its side (left from the front, right from the back), then copied back.
+    // next free slot of its side in the other buffer (left from the front, right from the back).
+    float* const* c = cols[t.buf];
+    float* const* s = cols[1 - t.buf];
+    const std::uint32_t* ids = id_buf[t.buf];
+    std::uint32_t* out_ids = id_buf[1 - t.buf];
     const float* cd = c[dim];
-    const std::uint32_t count = t.end - t.begin;
     std::uint32_t num_left = 0;
-    std::uint32_t num_right = 0;
-    for (std::uint32_t i = 0; i < count; ++i) {
-      const std::uint32_t src = t.begin + i;
+    std::uint32_t last = t.end - 1;
+    for (std::uint32_t src = t.begin; src < t.end; ++src) {
       const bool is_left = cd[src] < split;
-      const std::uint32_t pos = is_left ? num_left : count - 1 - num_right;
+      const std::uint32_t pos = is_left ? t.begin + num_left : last;
       for (int k = 0; k < Dim; ++k) s[k][pos] = c[k][src];
-      scratch_ids[pos] = ids[src];
+      out_ids[pos] = ids[src];
       num_left += is_left ? 1 : 0;
-      num_right += is_left ? 0 : 1;
+      last -= is_left ? 0 : 1;
     }
-    for (int k = 0; k < Dim; ++k) std::copy(s[k], s[k] + count, c[k] + t.begin);
-    std::copy(scratch_ids.data(), scratch_ids.data() + count, ids + t.begin);
     const std::uint32_t mid = t.begin + num_left;
 
     // A child that will be a leaf needs only its bound along `dim` (for this node's lo / hi).
     auto child_box = [&](std::uint32_t begin, std::uint32_t end) {
-      if (end - begin > leaf_size) return tight_box(begin, end);
+      if (end - begin > leaf_size) return tight_box(s, begin, end);
       Box box{};
       box.lo[dim] = std::numeric_limits<float>::infinity();
       box.hi[dim] = -std::numeric_limits<float>::infinity();
-      detail::min_max_sum(c[dim] + begin, end - begin, box.lo[dim], box.hi[dim], box.sum[dim]);
+      detail::min_max_sum(s[dim] + begin, end - begin, box.lo[dim], box.hi[dim], box.sum[dim]);
       return box;
     };
     const Box left = child_box(t.begin, mid);
@@ -251,19 +261,24 @@ void KdTree<Dim>::build() {
     node.lo = left.hi[dim];
     node.hi = right.lo[dim];
     node.dim = dim;
-    stack.push_back(Task{mid, t.end, id, t.depth + 1, true, right});
-    stack.push_back(Task{t.begin, mid, id, t.depth + 1, false, left});  // popped next: becomes node id + 1
+    stack.push_back(Task{mid, t.end, id, t.depth + 1, true, 1 - t.buf, right});
+    // popped next: becomes node id + 1
+    stack.push_back(Task{t.begin, mid, id, t.depth + 1, false, 1 - t.buf, left});
   }
 
   // Leaf-blocked layout: the points of leaf [a, b) occupy coords_[Dim * a, Dim * b), first their
   // b - a x coordinates, then the y's (then the z's), so a leaf scan reads one contiguous block.
-  for (int k = 0; k < Dim; ++k) std::copy(c[k], c[k] + n, s[k]);
-  for (const Node& node : nodes_) {
+  std::vector<float> blocks(static_cast<std::size_t>(Dim) * n);
+  for (std::size_t i = 0; i < nodes_.size(); ++i) {
+    const Node& node = nodes_[i];
     if (node.dim >= 0) continue;
+    const int buf = leaf_buf[i];
     const std::size_t m = node.b - node.a;
-    float* block = coords_.data() + static_cast<std::size_t>(Dim) * node.a;
-    for (int k = 0; k < Dim; ++k) std::copy(s[k] + node.a, s[k] + node.b, block + k * m);
+    float* block = blocks.data() + static_cast<std::size_t>(Dim) * node.a;
+    for (int k = 0; k < Dim; ++k) std::copy(cols[buf][k] + node.a, cols[buf][k] + node.b, block + k * m);
+    if (buf == 1) std::copy(other_ids.data() + node.a, other_ids.data() + node.b, ids_.data() + node.a);
   }
+  coords_.swap(blocks);
 }
 
 // ---- queries ----------------------------------------------------------------------------------
@@ -318,39 +333,52 @@ void KdTree<Dim>::search(const float* q, float* box_d, Set& set) const {
     float bound;
     float box_d[Dim];
   };
+  const Node* nodes = nodes_.data();
+  // First descent without box bookkeeping: only the path is recorded. Most queries of a cloud's
+  // own points end here (distance 0 in the first leaf); otherwise the pending far children are
+  // rebuilt from the path exactly as the bookkeeping descent below would have pushed them.
+  std::uint32_t path[kMaxStack];
+  int depth = 0;
+  std::uint32_t node_id = 0;
+  while (nodes[node_id].dim >= 0) {
+    const Node& node = nodes[node_id];
+    path[depth++] = node_id;
+    const float x = q[node.dim];
+    node_id = (x - node.lo) + (x - node.hi) >= 0.0f ? node.a : node_id + 1;
+  }
+  scan_leaf(nodes[node_id], q, set);
+  if (set.done()) return;
+
   Pending stack[kMaxStack];
   int top = 0;
-  std::uint32_t node_id = 0;
-  const Node* nodes = nodes_.data();
-  for (;;) {
-    const Node* node = nodes + node_id;
-    while (node->dim >= 0) {
-      // Branch-free step: the nearer child is next, the farther one is pushed (and dropped at
-      // once when its bound cannot beat the set). lo <= hi, so on the side of the midpoint that
-      // q lies on, its offset to the other child's boundary has the sign that makes t * t the
-      // distance to that child's slab.
-      const int dim = node->dim;
-      const float diff_lo = q[dim] - node->lo;
-      const float diff_hi = q[dim] - node->hi;
-      const bool go_right = diff_lo + diff_hi >= 0.0f;
-      const std::uint32_t left_child = node_id + 1;
-      const std::uint32_t near_child = go_right ? node->a : left_child;
-      const std::uint32_t far_child = go_right ? left_child : node->a;
-      const float t = go_right ? diff_lo : diff_hi;
-      const float cut = t * t;
-      Pending& p = stack[top];
-      float far_bound = 0.0f;
-      for (int k = 0; k < Dim; ++k) {
-        p.box_d[k] = k == dim ? std::max(cut, box_d[k]) : box_d[k];
-        far_bound += p.box_d[k];
-      }
-      p.node = far_child;
-      p.bound = far_bound;
-      top += set.visit(far_bound) ? 1 : 0;
-      node_id = near_child;
-      node = nodes + node_id;
+  // Branch-free step: the nearer child is next, the farther one is pushed (and dropped at once
+  // when its bound cannot beat the set). lo <= hi, so on the side of the midpoint that q lies on,
+  // its offset to the other child's boundary has the sign that makes t * t the distance to that
+  // child's slab. Returns the nearer child.
+  auto step = [&](std::uint32_t id) {
+    const Node& node = nodes[id];
+    const int dim = node.dim;
+    const float diff_lo = q[dim] - node.lo;
+    const float diff_hi = q[dim] - node.hi;
+    const bool go_right = diff_lo + diff_hi >= 0.0f;
+    const std::uint32_t left_child = id + 1;
+    const std::uint32_t near_child = go_right ? node.a : left_child;
+    const std::uint32_t far_child = go_right ? left_child : node.a;
+    const float t = go_right ? diff_lo : diff_hi;
+    const float cut = t * t;
+    Pending& p = stack[top];
+    float far_bound = 0.0f;
+    for (int k = 0; k < Dim; ++k) {
+      p.box_d[k] = k == dim ? std::max(cut, box_d[k]) : box_d[k];
+      far_bound += p.box_d[k];
     }
-    scan_leaf(*node, q, set);
+    p.node = far_child;
+    p.bound = far_bound;
+    top += set.visit(far_bound) ? 1 : 0;
+    return near_child;
+  };
+  for (int i = 0; i < depth; ++i) step(path[i]);
+  for (;;) {
     for (;;) {
       if (top == 0) return;
       const Pending& p = stack[--top];
@@ -359,6 +387,8 @@ void KdTree<Dim>::search(const float* q, float* box_d, Set& set) const {
       for (int k = 0; k < Dim; ++k) box_d[k] = p.box_d[k];
       break;
     }
+    while (nodes[node_id].dim >= 0) node_id = step(node_id);
+    scan_leaf(nodes[node_id], q, set);
   }
 }
 
