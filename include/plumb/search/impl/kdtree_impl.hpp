@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -165,14 +166,15 @@ void KdTree<Dim>::build() {
   const std::size_t leaf_size = settings_.leaf_size;
   // Two buffers (coordinate columns + ids): a node's points lie in buffer `buf` of its task, its
   // partition writes them to the same range of the other buffer, where its children find them.
-  std::vector<float> other(static_cast<std::size_t>(Dim) * n);
-  std::vector<std::uint32_t> other_ids(n);
+  // (Uninitialised: every slot a node reads has been written by its parent's partition.)
+  const std::unique_ptr<float[]> other(new float[static_cast<std::size_t>(Dim) * n]);
+  const std::unique_ptr<std::uint32_t[]> other_ids(new std::uint32_t[n]);
   float* cols[2][Dim];
   for (int k = 0; k < Dim; ++k) {
     cols[0][k] = coords_.data() + static_cast<std::size_t>(k) * n;
-    cols[1][k] = other.data() + static_cast<std::size_t>(k) * n;
+    cols[1][k] = other.get() + static_cast<std::size_t>(k) * n;
   }
-  std::uint32_t* id_buf[2] = {ids_.data(), other_ids.data()};
+  std::uint32_t* id_buf[2] = {ids_.data(), other_ids.get()};
 
   struct Box {
     float lo[Dim];
@@ -296,7 +298,7 @@ void KdTree<Dim>::build() {
     const std::size_t m = node.b - node.a;
     float* block = blocks.data() + static_cast<std::size_t>(Dim) * node.a;
     for (int k = 0; k < Dim; ++k) std::copy(cols[buf][k] + node.a, cols[buf][k] + node.b, block + k * m);
-    if (buf == 1) std::copy(other_ids.data() + node.a, other_ids.data() + node.b, ids_.data() + node.a);
+    if (buf == 1) std::copy(other_ids.get() + node.a, other_ids.get() + node.b, ids_.data() + node.a);
   }
   coords_.swap(blocks);
 }
