@@ -33,9 +33,9 @@ struct KdTree<Dim>::KnnSet {
   std::size_t count = 0;
   float worst = std::numeric_limits<float>::infinity();
 
+  static constexpr bool kFastFirstLeaf = false;
   bool visit(float box_dist) const { return box_dist < worst; }
   bool accepts(float d) const { return d < worst; }
-  bool done() const { return !(worst > 0.0f); }  // k points at distance 0: nothing can enter
   void add(float d, std::uint32_t i) {
     if (!(d < worst)) return;
     std::size_t j = count < k ? count++ : k - 1;
@@ -59,6 +59,7 @@ struct KdTree<Dim>::NnSet {
 
   bool visit(float box_dist) const { return box_dist < best_d; }
   bool accepts(float d) const { return d < best_d; }
+  static constexpr bool kFastFirstLeaf = true;
   bool done() const { return !(best_d > 0.0f); }  // distance 0 found: nothing can beat it
   void add(float d, std::uint32_t i) {
     if (d < best_d) {
@@ -77,6 +78,7 @@ struct KdTree<Dim>::RadiusSet {
 
   bool visit(float box_dist) const { return box_dist <= r_sq; }
   bool accepts(float d) const { return d <= r_sq; }
+  static constexpr bool kFastFirstLeaf = false;
   static bool done() { return false; }
   void add(float d, std::uint32_t i) {
     if (d <= r_sq) {
@@ -356,20 +358,22 @@ void KdTree<Dim>::search(const float* q, float* box_d, Set& set) const {
     float box_d[Dim];
   };
   const Node* nodes = nodes_.data();
-  // First descent without box bookkeeping: only the path is recorded. Most queries of a cloud's
-  // own points end here (distance 0 in the first leaf); otherwise the pending far children are
-  // rebuilt from the path exactly as the bookkeeping descent below would have pushed them.
+  // Nearest-point queries descend first without box bookkeeping, recording only the path. Most
+  // queries of a cloud's own points end there (distance 0 in the first leaf); otherwise the
+  // pending far children are rebuilt from the path exactly as the bookkeeping descent pushes them.
   std::uint32_t path[kMaxStack];
   int depth = 0;
   std::uint32_t node_id = 0;
-  while (nodes[node_id].dim >= 0) {
-    const Node& node = nodes[node_id];
-    path[depth++] = node_id;
-    const float x = q[node.dim];
-    node_id = (x - node.lo) + (x - node.hi) >= 0.0f ? node.a : node_id + 1;
+  if constexpr (Set::kFastFirstLeaf) {
+    while (nodes[node_id].dim >= 0) {
+      const Node& node = nodes[node_id];
+      path[depth++] = node_id;
+      const float x = q[node.dim];
+      node_id = (x - node.lo) + (x - node.hi) >= 0.0f ? node.a : node_id + 1;
+    }
+    scan_leaf(nodes[node_id], q, set);
+    if (set.done()) return;
   }
-  scan_leaf(nodes[node_id], q, set);
-  if (set.done()) return;
 
   Pending stack[kMaxStack];
   int top = 0;
@@ -400,8 +404,9 @@ void KdTree<Dim>::search(const float* q, float* box_d, Set& set) const {
     return near_child;
   };
   for (int i = 0; i < depth; ++i) step(path[i]);
+  bool at_root = !Set::kFastFirstLeaf;  // otherwise the first leaf is done: pop
   for (;;) {
-    for (;;) {
+    for (; !at_root;) {
       if (top == 0) return;
       const Pending& p = stack[--top];
       if (!set.visit(p.bound)) continue;
@@ -409,6 +414,7 @@ void KdTree<Dim>::search(const float* q, float* box_d, Set& set) const {
       for (int k = 0; k < Dim; ++k) box_d[k] = p.box_d[k];
       break;
     }
+    at_root = false;
     while (nodes[node_id].dim >= 0) node_id = step(node_id);
     scan_leaf(nodes[node_id], q, set);
   }
