@@ -201,8 +201,20 @@ void KdTree<Dim>::build() {
 
   nodes_.clear();
   nodes_.reserve(2 * (n / std::max<std::size_t>(leaf_size / 2, 1)) + 1);
-  std::vector<std::uint8_t> leaf_buf;  // per node: the buffer holding a leaf's points
-  leaf_buf.reserve(nodes_.capacity());
+  // Leaf-blocked layout, written as each leaf is made (its points are still in cache): the points
+  // of leaf [a, b) occupy blocks[Dim * a, Dim * b), first their b - a x coordinates, then the y's
+  // (then the z's), so a leaf scan reads one contiguous block. Becomes coords_ at the end.
+  std::vector<float> blocks(static_cast<std::size_t>(Dim) * n);
+  auto finish_leaf = [&](const Task& t) {
+    const std::size_t m = t.end - t.begin;
+    float* block = blocks.data() + static_cast<std::size_t>(Dim) * t.begin;
+    for (int k = 0; k < Dim; ++k) {
+      std::copy(cols[t.buf][k] + t.begin, cols[t.buf][k] + t.end, block + k * m);
+    }
+    if (t.buf == 1) {
+      std::copy(other_ids.get() + t.begin, other_ids.get() + t.end, ids_.data() + t.begin);
+    }
+  };
   std::vector<Task> stack;
   stack.reserve(64);
   Task root{0, static_cast<std::uint32_t>(n), 0, 0, false, 0,
@@ -220,9 +232,11 @@ void KdTree<Dim>::build() {
     const auto id = static_cast<std::uint32_t>(nodes_.size());
     max_depth_ = std::max<std::size_t>(max_depth_, t.depth);
     nodes_.push_back(Node{t.begin, t.end, 0.0f, 0.0f, kLeaf});  // a leaf unless split below
-    leaf_buf.push_back(static_cast<std::uint8_t>(t.buf));
     if (t.is_right) nodes_[t.parent].a = id;
-    if (t.end - t.begin <= leaf_size) continue;  // a leaf (its task carries no box)
+    if (t.end - t.begin <= leaf_size) {  // a leaf (its task carries no box)
+      finish_leaf(t);
+      continue;
+    }
 
     // Widest dimension of the (tight) bounding box.
     int dim = 0;
@@ -236,6 +250,7 @@ void KdTree<Dim>::build() {
     }
     if (!(extent > 0.0f)) {  // all points coincide: one bucket, whatever its size
       nodes_[id].dim = kCoincidentLeaf;
+      finish_leaf(t);
       continue;
     }
 
@@ -290,18 +305,6 @@ void KdTree<Dim>::build() {
     stack.push_back(Task{t.begin, mid, id, t.depth + 1, false, 1 - t.buf, left});
   }
 
-  // Leaf-blocked layout: the points of leaf [a, b) occupy coords_[Dim * a, Dim * b), first their
-  // b - a x coordinates, then the y's (then the z's), so a leaf scan reads one contiguous block.
-  std::vector<float> blocks(static_cast<std::size_t>(Dim) * n);
-  for (std::size_t i = 0; i < nodes_.size(); ++i) {
-    const Node& node = nodes_[i];
-    if (node.dim >= 0) continue;
-    const int buf = leaf_buf[i];
-    const std::size_t m = node.b - node.a;
-    float* block = blocks.data() + static_cast<std::size_t>(Dim) * node.a;
-    for (int k = 0; k < Dim; ++k) std::copy(cols[buf][k] + node.a, cols[buf][k] + node.b, block + k * m);
-    if (buf == 1) std::copy(other_ids.get() + node.a, other_ids.get() + node.b, ids_.data() + node.a);
-  }
   coords_.swap(blocks);
 }
 
