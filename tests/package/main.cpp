@@ -3,6 +3,7 @@
 // the header-only core, a compiled module (PCD I/O with LZF) and the templates (kd-tree, voxel grid).
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 
 #include <plumb/plumb.hpp>
@@ -26,7 +27,8 @@ int main() {
   const auto nearest = tree.nearest(plumb::Vector3f(0.0f, 0.0f, 0.0f));
   const bool tree_ok = nearest && nearest->index == 0;
 
-  const std::string path = "plumb_consumer_roundtrip.pcd";
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "plumb_consumer_roundtrip.pcd").string();
   plumb::io::PcdWriteSettings pcd;
   pcd.encoding = plumb::io::PcdEncoding::kBinaryCompressed;
   plumb::io::write_pcd(path, cloud, pcd);
