@@ -51,6 +51,19 @@ inline void write_file(const std::string& path, const char* data, std::size_t si
   if (written != size || close_failed) PLUMB_THROW(path << ": write failed");
 }
 
+/// Encode with `make_bytes()` (which may throw plumb::Error about the cloud) and write the result;
+/// an encoding error is re-thrown with the path in front, so every writer names its file alike.
+template <class MakeBytes>
+void encode_and_write(const std::string& path, MakeBytes&& make_bytes) {
+  std::string bytes;
+  try {
+    bytes = make_bytes();
+  } catch (const Error& e) {
+    PLUMB_THROW(path << ": " << e.what());
+  }
+  write_file(path, bytes.data(), bytes.size());
+}
+
 /// Line-oriented cursor over a text (or header) region; tolerates CRLF.
 struct LineCursor {
   const char* begin = nullptr;  ///< start of the whole buffer (for byte offsets)

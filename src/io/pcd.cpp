@@ -594,13 +594,7 @@ std::string write_pcd_buffer(const PointCloud& cloud, const PcdWriteSettings& se
 }
 
 void write_pcd(const std::string& path, const PointCloud& cloud, const PcdWriteSettings& settings) {
-  std::string bytes;
-  try {
-    bytes = write_pcd_buffer(cloud, settings);
-  } catch (const Error& e) {
-    PLUMB_THROW(path << ": " << e.what());
-  }
-  cloud_detail::write_file(path, bytes.data(), bytes.size());
+  cloud_detail::encode_and_write(path, [&] { return write_pcd_buffer(cloud, settings); });
 }
 
 }  // namespace plumb::io

@@ -458,13 +458,7 @@ std::string write_ply_buffer(const PointCloud& cloud, const PlyWriteSettings& se
 }
 
 void write_ply(const std::string& path, const PointCloud& cloud, const PlyWriteSettings& settings) {
-  std::string bytes;
-  try {
-    bytes = write_ply_buffer(cloud, settings);
-  } catch (const Error& e) {
-    PLUMB_THROW(path << ": " << e.what());
-  }
-  cloud_detail::write_file(path, bytes.data(), bytes.size());
+  cloud_detail::encode_and_write(path, [&] { return write_ply_buffer(cloud, settings); });
 }
 
 }  // namespace plumb::io

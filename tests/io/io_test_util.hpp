@@ -6,7 +6,9 @@
 /// "throws plumb::Error naming these things".
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -63,6 +65,23 @@ inline void expect_same_cloud(const PointCloud& a, const PointCloud& b) {
       ASSERT_EQ(a.labels[i], b.labels[i]) << "label " << i;
     }
   }
+}
+
+/// @brief n random points with every optional field set, coordinates uniform in [-scale, scale];
+/// the caller plants its own awkward values (NaN, -0, extremes) on top.
+inline PointCloud random_full_cloud(std::size_t n, unsigned seed, float scale, float time_scale) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-scale, scale);
+  PointCloud c;
+  for (std::size_t i = 0; i < n; ++i) {
+    c.points.emplace_back(u(rng), u(rng), u(rng));
+    c.normals.emplace_back(u(rng) / scale, u(rng) / scale, u(rng) / scale);
+    c.intensities.push_back(u(rng) + scale);
+    c.rings.push_back(static_cast<std::uint16_t>(rng() % 65536));
+    c.times.push_back(u(rng) * time_scale);
+    c.labels.push_back(static_cast<std::int32_t>(rng()));
+  }
+  return c;
 }
 
 }  // namespace plumb::test

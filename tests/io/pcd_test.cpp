@@ -39,17 +39,7 @@ void append_raw(std::string& out, T v) {
 
 // A cloud with every optional field, awkward float values (NaN rows, -0, denormals, extremes).
 PointCloud make_full_cloud(std::size_t n, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(-100.0f, 100.0f);
-  PointCloud c;
-  for (std::size_t i = 0; i < n; ++i) {
-    c.points.emplace_back(u(rng), u(rng), u(rng));
-    c.normals.emplace_back(u(rng) / 100.0f, u(rng) / 100.0f, u(rng) / 100.0f);
-    c.intensities.push_back(u(rng) + 100.0f);
-    c.rings.push_back(static_cast<std::uint16_t>(rng() % 65536));
-    c.times.push_back(u(rng) * 1e-3f);
-    c.labels.push_back(static_cast<std::int32_t>(rng()));
-  }
+  PointCloud c = test::random_full_cloud(n, seed, 100.0f, 1e-3f);
   if (n >= 6) {
     const float nan = std::numeric_limits<float>::quiet_NaN();
     c.points[1] = Vector3f(nan, nan, nan);

@@ -26,17 +26,7 @@ using plumb::test::temp_path;
 PointCloud read_string(const std::string& bytes) { return read_ply_buffer(bytes.data(), bytes.size(), "mem.ply"); }
 
 PointCloud make_full_cloud(std::size_t n, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(-50.0f, 50.0f);
-  PointCloud c;
-  for (std::size_t i = 0; i < n; ++i) {
-    c.points.emplace_back(u(rng), u(rng), u(rng));
-    c.normals.emplace_back(u(rng) / 50.0f, u(rng) / 50.0f, u(rng) / 50.0f);
-    c.intensities.push_back(u(rng) + 50.0f);
-    c.rings.push_back(static_cast<std::uint16_t>(rng() % 65536));
-    c.times.push_back(u(rng) * 1e-4f);
-    c.labels.push_back(static_cast<std::int32_t>(rng()));
-  }
+  PointCloud c = test::random_full_cloud(n, seed, 50.0f, 1e-4f);
   if (n >= 3) {
     c.points[1] = Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
     c.points[2] = Vector3f(-0.0f, std::numeric_limits<float>::denorm_min(), std::numeric_limits<float>::lowest());
