@@ -23,6 +23,8 @@
 #include "plumb/filters/crop.hpp"
 #include "plumb/filters/voxel_grid.hpp"
 
+#include "plumb/features/normals.hpp"
+
 #include "plumb/io/calib_tuples.hpp"
 #include "plumb/io/carmen.hpp"
 #include "plumb/io/cloud_io.hpp"

@@ -1,0 +1,52 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+/// @file
+/// @brief Surface normals by PCA over each point's neighbourhood (SEEDS A1.3, A2.2).
+
+#include <cstddef>
+#include <limits>
+#include <vector>
+
+#include "plumb/core/point_cloud.hpp"
+#include "plumb/core/types.hpp"
+#include "plumb/search/kdtree.hpp"
+
+namespace plumb {
+
+/// @brief Neighbourhood and orientation of estimate_normals().
+struct NormalSettings {
+  /// Maximum neighbours per point (the point itself included), >= 3.
+  std::size_t k = 20;
+  /// Search radius [m]. 0 = plain k nearest; > 0 = hybrid: the k nearest that lie within `radius`
+  /// (Open3D's KDTreeSearchParamHybrid). Points with fewer than 3 neighbours get a NaN normal.
+  float radius = 0.0f;
+  /// Normals are flipped to point toward this position (sensor origin by default) [m].
+  Vector3f viewpoint = Vector3f::Zero();
+  /// Flip toward `viewpoint`; false leaves the sign of the smallest eigenvector as computed.
+  bool orient_to_viewpoint = true;
+};
+
+/// @brief Per-point normals and surface variation.
+struct NormalResult {
+  std::vector<Vector3f> normals;  ///< unit normal per input point; NaN where not estimable
+  std::vector<float> curvature;   ///< λ0 / (λ0 + λ1 + λ2) per point (PCL's surface variation); NaN likewise
+  std::size_t num_invalid = 0;    ///< points with NaN normal (non-finite, < 3 neighbours, coincident)
+};
+
+/// @brief Normal of every point of `cloud`, by PCA of its neighbours in `tree`.
+/// @param cloud query points (any size; non-finite points get NaN normals)
+/// @param tree  kd-tree over the cloud whose neighbours are used (usually built on `cloud`)
+/// @param tree_points the points `tree` was built from (indices returned by `tree` refer to them)
+NormalResult estimate_normals(const std::vector<Vector3f>& cloud, const KdTree<3>& tree,
+                              const std::vector<Vector3f>& tree_points,
+                              const NormalSettings& settings = {});
+
+/// @brief Convenience: builds a kd-tree on `cloud`, estimates normals and stores them in
+///        `cloud.normals`. An empty cloud or one without finite points throws plumb::Error.
+/// @return the number of points whose normal could not be estimated (stored as NaN)
+std::size_t compute_normals(PointCloud& cloud, const NormalSettings& settings = {});
+
+}  // namespace plumb
+
+#include "plumb/features/impl/normals_impl.hpp"
