@@ -11,6 +11,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "registry.hpp"
 #include "plumb/calibration/odometry_laser.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/io/calib_tuples.hpp"
@@ -102,3 +103,5 @@ void register_calibrate_command(CLI::App& app) {
 }
 
 }  // namespace plumb::cli
+
+PLUMB_CLI_COMMAND(calibrate, plumb::cli::register_calibrate_command);

@@ -12,6 +12,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "registry.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/eval/align.hpp"
 #include "plumb/eval/kitti_segments.hpp"
@@ -218,3 +219,5 @@ void register_eval_command(CLI::App& app) {
 }
 
 }  // namespace plumb::cli
+
+PLUMB_CLI_COMMAND(eval, plumb::cli::register_eval_command);

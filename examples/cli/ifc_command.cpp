@@ -14,6 +14,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "registry.hpp"
 #include "plumb/bim/mesh.hpp"
 #include "plumb/bim/sample.hpp"
 #include "plumb/core/error.hpp"
@@ -190,3 +191,5 @@ void register_ifc_commands(CLI::App& app) {
 }
 
 }  // namespace plumb::cli
+
+PLUMB_CLI_COMMAND(ifc, plumb::cli::register_ifc_commands);

@@ -1,25 +1,48 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// The `plumb` command line. Each subcommand lives in its own file `<name>_command.cpp` and is
-// registered here with one call; the subcommand does its work in its CLI11 callback.
+// The `plumb` command line. Each subcommand lives in its own file `<name>_command.cpp` that
+// registers itself with PLUMB_CLI_COMMAND (registry.hpp); it does its work in its CLI11 callback.
 //
 // Exit codes: 0 success; 1 an input could not be used (plumb::Error, message names the file and
 // line); CLI11's own codes (>= 100) for usage errors such as an unknown option.
 
+#include <algorithm>
 #include <exception>
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
 #include "plumb/core/error.hpp"
 #include "plumb/version.hpp"
+#include "registry.hpp"
 
 namespace plumb::cli {
-// One declaration per subcommand file.
-void register_eval_command(CLI::App& app);
-void register_calibrate_command(CLI::App& app);
-void register_ifc_commands(CLI::App& app);
-void register_scan2d_command(CLI::App& app);
+
+namespace {
+struct Entry {
+  std::string name;
+  RegisterFn fn;
+};
+// Function-local static: safe to use from other files' static initializers.
+std::vector<Entry>& registry() {
+  static std::vector<Entry> entries;
+  return entries;
+}
+}  // namespace
+
+int add_command(const char* name, RegisterFn fn) {
+  registry().push_back({name, fn});
+  return 0;
+}
+
+void register_all_commands(CLI::App& app) {
+  auto entries = registry();
+  std::sort(entries.begin(), entries.end(),
+            [](const Entry& a, const Entry& b) { return a.name < b.name; });
+  for (const Entry& e : entries) e.fn(app);
+}
+
 }  // namespace plumb::cli
 
 int main(int argc, char** argv) {
@@ -28,10 +51,7 @@ int main(int argc, char** argv) {
                        "Print the version and exit");
   app.require_subcommand(1);
 
-  plumb::cli::register_eval_command(app);
-  plumb::cli::register_calibrate_command(app);
-  plumb::cli::register_ifc_commands(app);
-  plumb::cli::register_scan2d_command(app);
+  plumb::cli::register_all_commands(app);
 
   try {
     app.parse(argc, argv);

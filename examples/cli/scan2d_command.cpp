@@ -11,6 +11,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "registry.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/core/trajectory.hpp"
 #include "plumb/io/carmen.hpp"
@@ -84,3 +85,5 @@ void register_scan2d_command(CLI::App& app) {
 }
 
 }  // namespace plumb::cli
+
+PLUMB_CLI_COMMAND(scan2d, plumb::cli::register_scan2d_command);
