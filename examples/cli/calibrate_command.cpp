@@ -1,12 +1,15 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// `plumb calibrate TUPLES`: wheel radii, axle and laser pose of a differential-drive robot from a
-// tuple file in Censi's format (Censi, Franchi, Marchionni, Oriolo, T-RO 2013).
+// `plumb calibrate TUPLES` or `plumb calibrate --log LOG --wheels WHEELS.csv`: wheel radii, axle and
+// laser pose of a differential-drive robot (Censi, Franchi, Marchionni, Oriolo, T-RO 2013), from a
+// tuple file in Censi's format or straight from a robot's laser log and wheel encoder log (tuples
+// made by PLICP scan matching).
 
 #include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -14,26 +17,83 @@
 #include "registry.hpp"
 #include "plumb/calibration/odometry_laser.hpp"
 #include "plumb/core/error.hpp"
+#include "plumb/calibration/tuple_extraction.hpp"
 #include "plumb/io/calib_tuples.hpp"
+#include "plumb/io/carmen.hpp"
+#include "plumb/io/wheel_encoders.hpp"
 
 namespace plumb::cli {
 namespace {
 
 struct CalibrateOptions {
   std::string tuples_path;
+  std::string log_path;
+  std::string wheels_path;
+  std::string tuples_out;
+  double ticks_per_revolution = 0.0;
+  std::size_t spacing = 5;
+  std::vector<double> nominal;  // r_L r_R axle l_x l_y l_theta
   bool json = false;
   int outlier_iterations = OdometryLaserCalibrationSettings{}.outlier_iterations;
   double outlier_quantile = OdometryLaserCalibrationSettings{}.outlier_quantile;
 };
 
+/// What tuple extraction from a log did (absent when tuples came from a file).
+struct ExtractionSummary {
+  std::size_t scans = 0, pairs = 0, tuples = 0, without_odometry = 0, speed_changes = 0, match_failures = 0;
+};
+
+/// Tuples from a laser log + wheel encoder log: PLICP between scans `spacing` apart.
+std::vector<CalibrationTuple> tuples_from_logs(const CalibrateOptions& o, ExtractionSummary& summary) {
+  const io::CarmenLog log = io::read_carmen(o.log_path);
+  std::vector<LaserScan> scans;
+  scans.reserve(log.lasers.size());
+  for (const io::CarmenLaser& laser : log.lasers) scans.push_back(laser.scan);
+  PLUMB_CHECK(!scans.empty(), o.log_path << ": no laser scan (FLASER, RAWLASER or ROBOTLASER1)");
+  for (std::size_t k = 1; k < scans.size(); ++k) {
+    PLUMB_CHECK(scans[k].stamp > scans[k - 1].stamp,
+                o.log_path << ":" << log.lasers[k].line << ": laser timestamp " << scans[k].stamp
+                           << " does not increase");
+  }
+  io::WheelEncoderReadSettings wheel_settings;
+  wheel_settings.ticks_per_revolution = o.ticks_per_revolution;
+  const std::vector<WheelEncoderReading> wheels = io::read_wheel_encoders(o.wheels_path, wheel_settings);
+
+  TupleExtractionSettings settings;
+  settings.scan_spacing = o.spacing;
+  if (o.nominal.size() == 6) {
+    settings.nominal = {o.nominal[0], o.nominal[1], o.nominal[2], Pose2{o.nominal[3], o.nominal[4], o.nominal[5]}};
+  }
+  const TupleExtractionResult ex = extract_calibration_tuples(scans, wheels, plicp_scan_matcher(), settings);
+  summary = {scans.size(),           ex.num_pairs,         ex.tuples.size(),
+             ex.num_without_odometry, ex.num_speed_changes, ex.num_match_failures};
+  PLUMB_CHECK(ex.status == Status::kOk,
+              o.log_path << " + " << o.wheels_path << ": no calibration tuple: " << ex.num_pairs << " scan pairs, "
+                         << ex.num_without_odometry << " without wheel readings around their stamps (do the two "
+                         << "logs share a clock?), " << ex.num_speed_changes << " with changing wheel speeds, "
+                         << ex.num_match_failures << " refused by the scan matcher");
+  if (!o.tuples_out.empty()) io::write_calib_tuples(ex.tuples, o.tuples_out);
+  return ex.tuples;
+}
+
 void run_calibrate(const CalibrateOptions& o) {
-  const std::vector<CalibrationTuple> tuples = io::read_calib_tuples(o.tuples_path);
+  const bool from_file = !o.tuples_path.empty();
+  const bool from_logs = !o.log_path.empty() || !o.wheels_path.empty();
+  PLUMB_CHECK(from_file != from_logs, "calibrate: give either a TUPLES file or --log LOG --wheels WHEELS.csv");
+  PLUMB_CHECK(from_file || (!o.log_path.empty() && !o.wheels_path.empty()),
+              "calibrate: --log and --wheels go together (laser log and wheel encoder log)");
+  PLUMB_CHECK(o.nominal.empty() || o.nominal.size() == 6,
+              "calibrate: --nominal takes 6 values (r_L r_R axle l_x l_y l_theta), got " << o.nominal.size());
+  ExtractionSummary summary;
+  const std::vector<CalibrationTuple> tuples =
+      from_file ? io::read_calib_tuples(o.tuples_path) : tuples_from_logs(o, summary);
+  const std::string source = from_file ? o.tuples_path : o.log_path;
   OdometryLaserCalibrationSettings settings;
   settings.outlier_iterations = o.outlier_iterations;
   settings.outlier_quantile = o.outlier_quantile;
   const OdometryLaserCalibrationResult r = calibrate_odometry_laser(tuples, settings);
   if (r.status != Status::kOk) {
-    PLUMB_THROW(o.tuples_path << ": calibration failed (" << to_string(r.status) << ") with "
+    PLUMB_THROW(source << ": calibration failed (" << to_string(r.status) << ") with "
                               << r.num_tuples << " tuples"
                               << (r.status == Status::kDegenerate
                                       ? ": the motion must mix turning and driving (straight runs, "
@@ -48,7 +108,7 @@ void run_calibrate(const CalibrateOptions& o) {
       for (int j = 0; j < 6; ++j) row.push_back(r.covariance(i, j));
       cov.push_back(row);
     }
-    const nlohmann::json out = {
+    nlohmann::json out = {
         {"axle", p.axle},
         {"l_diam", 2.0 * p.radius_left},
         {"r_diam", 2.0 * p.radius_right},
@@ -61,11 +121,25 @@ void run_calibrate(const CalibrateOptions& o) {
         {"num_inliers", r.num_inliers},
         {"laser_noise_std", {r.laser_noise_std(0), r.laser_noise_std(1), r.laser_noise_std(2)}},
     };
+    if (from_logs) {
+      out["extraction"] = {{"scans", summary.scans},
+                           {"pairs", summary.pairs},
+                           {"tuples", summary.tuples},
+                           {"without_odometry", summary.without_odometry},
+                           {"speed_changes", summary.speed_changes},
+                           {"match_failures", summary.match_failures}};
+    }
     std::cout << out.dump() << '\n';
     return;
   }
   auto sd = [&r](int i) { return std::sqrt(r.covariance(i, i)); };
-  std::printf("calibration of %s: %zu tuples, %zu used after outlier rejection\n", o.tuples_path.c_str(),
+  if (from_logs) {
+    std::printf("%zu scans, %zu pairs: %zu tuples; skipped %zu without wheel readings, %zu with changing wheel "
+                "speeds, %zu refused by the scan matcher\n",
+                summary.scans, summary.pairs, summary.tuples, summary.without_odometry, summary.speed_changes,
+                summary.match_failures);
+  }
+  std::printf("calibration of %s: %zu tuples, %zu used after outlier rejection\n", source.c_str(),
               r.num_tuples, r.num_inliers);
   std::printf("  %-22s %14s %12s\n", "parameter", "estimate", "std dev");
   std::printf("  %-22s %14.7f %12.7f\n", "left wheel diam [m]", 2.0 * p.radius_left, 2.0 * sd(0));
@@ -87,8 +161,23 @@ void register_calibrate_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "calibrate", "Wheel radii, axle and laser pose from calibration tuples (Censi et al. T-RO 2013)");
   cmd->add_option("TUPLES", options->tuples_path,
-                  "Tuple file: JSON lines {\"T\", \"phi_l\", \"phi_r\", \"sm\": [x, y, theta]}")
-      ->required();
+                  "Tuple file: JSON lines {\"T\", \"phi_l\", \"phi_r\", \"sm\": [x, y, theta]}");
+  cmd->add_option("--log", options->log_path,
+                  "Instead of TUPLES: CARMEN laser log (FLASER / RAWLASER / ROBOTLASER1, plain or .gz); "
+                  "tuples are made by PLICP between scans --spacing apart");
+  cmd->add_option("--wheels", options->wheels_path,
+                  "With --log: wheel encoder CSV 'stamp,left,right' (cumulative wheel angles [rad], or ticks "
+                  "with --ticks-per-rev), on the laser log's clock");
+  cmd->add_option("--ticks-per-rev", options->ticks_per_revolution,
+                  "Wheel columns are encoder ticks, this many per wheel revolution")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--spacing", options->spacing, "With --log: match scan k against scan k + spacing")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  cmd->add_option("--nominal", options->nominal,
+                  "With --log: nominal r_L r_R axle [m] l_x l_y [m] l_theta [rad], only to seed the scan matcher")
+      ->expected(6);
+  cmd->add_option("--tuples-out", options->tuples_out, "With --log: also write the tuples (Censi's format)");
   cmd->add_flag("--json", options->json,
                 "Print one JSON object: axle, l_diam, r_diam [m], l_x, l_y [m], l_theta [rad], covariance "
                 "6x6 of (r_L, r_R, axle, l_x, l_y, l_theta) (radii, as Censi's tool)");

@@ -126,7 +126,8 @@ TEST(TupleExtractionTest, ExtractedTuplesCalibrateToTruth) {
   std::size_t calls = 0;
   double max_guess_error = 0.0;
   // Stand-in matcher: the true laser motion, refused when the pair straddles a speed change
-  // (there the constant-speed tuple model is not exact).
+  // (there the constant-speed tuple model is not exact). The extractor's own constant-speed check
+  // should drop those pairs before they reach the matcher.
   const plumb::ScanMatcher matcher = [&](const LaserScan& ref, const LaserScan& cur,
                                          const Pose2& guess) -> std::optional<Pose2> {
     ++calls;
@@ -141,9 +142,10 @@ TEST(TupleExtractionTest, ExtractedTuplesCalibrateToTruth) {
   const auto ex = plumb::extract_calibration_tuples(log_scans, wheels, matcher, settings);
   ASSERT_EQ(ex.status, plumb::Status::kOk);
   EXPECT_EQ(ex.num_pairs, log_scans.size() - 1);
-  EXPECT_EQ(calls, ex.num_pairs);
+  EXPECT_EQ(calls, ex.num_pairs - ex.num_speed_changes);
   EXPECT_EQ(ex.num_without_odometry, 0u);
-  EXPECT_EQ(ex.num_match_failures, sim.phi_l.size() - 1);  // every straddling pair
+  EXPECT_EQ(ex.num_speed_changes + ex.num_match_failures, sim.phi_l.size() - 1);  // every straddling pair
+  EXPECT_GE(ex.num_speed_changes + 2, sim.phi_l.size() - 1);  // (almost) all caught by the speed check
   ASSERT_EQ(ex.tuples.size(), sim.phi_l.size());
   EXPECT_LT(max_guess_error, 1e-12);
   for (std::size_t i = 0; i < ex.tuples.size(); ++i) {
@@ -171,6 +173,7 @@ TEST(TupleExtractionTest, SpacedPairsAndEncoderGaps) {
   };
   plumb::TupleExtractionSettings settings;
   settings.scan_spacing = 2;
+  settings.check_constant_speed = false;  // here every pair should reach the matcher
   const auto ex = plumb::extract_calibration_tuples(log_scans, gappy, identity, settings);
   EXPECT_EQ(ex.num_pairs, log_scans.size() - 2);
   std::size_t expected_missing = 0;
@@ -193,9 +196,14 @@ TEST(TupleExtractionTest, BadInputThrowsOrReportsNoTuples) {
   const plumb::ScanMatcher fail = [](const LaserScan&, const LaserScan&, const Pose2&) {
     return std::optional<Pose2>();
   };
-  const auto none = plumb::extract_calibration_tuples(log_scans, wheels, fail);
+  plumb::TupleExtractionSettings no_check;
+  no_check.check_constant_speed = false;
+  const auto none = plumb::extract_calibration_tuples(log_scans, wheels, fail, no_check);
   EXPECT_EQ(none.status, plumb::Status::kInsufficientData);
   EXPECT_EQ(none.num_match_failures, none.num_pairs);
+  plumb::TupleExtractionSettings negative;
+  negative.max_speed_change = -1.0;
+  EXPECT_THROW(plumb::extract_calibration_tuples(log_scans, wheels, fail, negative), plumb::Error);
   EXPECT_EQ(plumb::extract_calibration_tuples({}, wheels, fail).status, plumb::Status::kInsufficientData);
   auto unsorted = log_scans;
   std::swap(unsorted[1].stamp, unsorted[2].stamp);

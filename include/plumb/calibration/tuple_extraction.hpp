@@ -11,7 +11,8 @@
 /// scan matcher supplied by the caller (e.g. PLICP), started from the motion the nominal
 /// parameters predict, s = ⊖l ⊕ r ⊕ l. Pairs whose stamps are not covered by encoder readings
 /// (or fall in a gap between readings longer than max_encoder_gap), and pairs the matcher
-/// refuses, give no tuple and are counted.
+/// refuses, give no tuple and are counted; so do pairs whose wheel speeds change within the
+/// interval (the tuple model assumes constant speeds).
 
 #include <cstddef>
 #include <functional>
@@ -56,8 +57,17 @@ struct TupleExtractionSettings {
   /// A scan stamp must lie between two encoder readings at most this far apart [s] (Censi's
   /// synchronizer: time_tolerance 0.5).
   double max_encoder_gap = 0.5;
-  /// Nominal parameters used only to predict the laser motion for the matcher's first guess;
-  /// with the default (all zero) the guess is the identity.
+  /// Drop pairs whose wheel speeds were not constant: the tuple model (Censi et al.) integrates
+  /// constant wheel speeds over the interval, and a pair spanning an acceleration, a stop or a
+  /// reversal gives a tuple whose motion the model cannot explain. The mean speed over each half of
+  /// the interval is compared; a pair is dropped when the two differ, for either wheel, by more than
+  /// max_speed_change + max_speed_change_ratio · (larger mean wheel speed) [rad/s].
+  bool check_constant_speed = true;
+  double max_speed_change = 0.05;       ///< [rad/s], absorbs encoder quantisation
+  double max_speed_change_ratio = 0.05; ///< relative part of the tolerance
+  /// Nominal parameters used only to predict the laser motion for the matcher's first guess.
+  /// With the default (all zero) the guess is the identity for scan_spacing 1, and for larger
+  /// spacings the composition of the matcher's scan-to-next-scan motions (one extra match per scan).
   OdometryLaserParams nominal;
 };
 
@@ -70,6 +80,7 @@ struct TupleExtractionResult {
   std::vector<std::pair<std::size_t, std::size_t>> scan_pairs;
   std::size_t num_pairs = 0;            ///< scan pairs considered
   std::size_t num_without_odometry = 0; ///< pairs skipped: stamps not covered by encoder readings
+  std::size_t num_speed_changes = 0;    ///< pairs skipped: wheel speeds not constant (see settings)
   std::size_t num_match_failures = 0;   ///< pairs the matcher refused
 };
 
