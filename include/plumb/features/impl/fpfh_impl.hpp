@@ -1,0 +1,220 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <utility>
+
+#include "plumb/core/error.hpp"
+#include "plumb/search/kdtree.hpp"
+
+namespace plumb {
+
+namespace detail {
+
+/// Bin of a value of the φ or θ feature, a cosine in [-1, 1]: floor(11 (f + 1) / 2), clamped.
+inline int fpfh_cos_bin(float f) {
+  int b = static_cast<int>(std::floor(static_cast<float>(kFpfhBinsPerFeature) * (f + 1.0f) * 0.5f));
+  return std::min(std::max(b, 0), kFpfhBinsPerFeature - 1);
+}
+
+/// Bin of the α feature, an angle in [-π, π]: floor(11 (f + π) / 2π), clamped.
+inline int fpfh_angle_bin(float f) {
+  constexpr float kPi = 3.14159265358979323846f;
+  int b = static_cast<int>(
+      std::floor(static_cast<float>(kFpfhBinsPerFeature) * (f + kPi) / (2.0f * kPi)));
+  return std::min(std::max(b, 0), kFpfhBinsPerFeature - 1);
+}
+
+/// Bins (α, φ, θ) of the pair features of (p1, n1) and (p2, n2), Rusu 2009 / PCL / Open3D
+/// `ComputePairFeatures`: the pair's source is the point whose normal is closer to the connecting
+/// line; u = source normal, v = unit(d × u), w = u × v, α = atan2(w·n_t, u·n_t), φ = v·n_t,
+/// θ = u·d/|d|. Degenerate pairs (coincident points, d parallel to u) give features (0, 0, 0).
+inline void fpfh_pair_bins(const Vector3f& p1, const Vector3f& n1, const Vector3f& p2,
+                           const Vector3f& n2, int bins[3]) {
+  Vector3f d = p2 - p1;
+  const float len = d.norm();
+  // Features (0, 0, 0) fall in the middle bin of each sub-histogram.
+  bins[0] = bins[1] = bins[2] = kFpfhBinsPerFeature / 2;
+  if (len == 0.0f) return;
+  const float a1 = n1.dot(d) / len;
+  const float a2 = n2.dot(d) / len;
+  const Vector3f* u = &n1;
+  const Vector3f* nt = &n2;
+  float theta = a1;
+  // acos(|a1|) > acos(|a2|)  <=>  |a1| < |a2|: the source is the point whose normal makes the
+  // smaller angle with the line; swapping the roles reverses d.
+  if (std::fabs(a1) < std::fabs(a2)) {
+    u = &n2;
+    nt = &n1;
+    d = -d;
+    theta = -a2;
+  }
+  Vector3f v = d.cross(*u);
+  const float v_norm = v.norm();
+  if (v_norm == 0.0f) return;
+  v /= v_norm;
+  const Vector3f w = u->cross(v);
+  const float phi = v.dot(*nt);
+  const float alpha = std::atan2(w.dot(*nt), u->dot(*nt));
+  bins[0] = fpfh_angle_bin(alpha);
+  bins[1] = fpfh_cos_bin(phi);
+  bins[2] = fpfh_cos_bin(theta);
+}
+
+/// Neighbour lists in compressed rows: row r holds entries [begin[r], begin[r + 1]).
+struct FpfhNeighborRows {
+  std::vector<std::uint32_t> begin{0};
+  std::vector<std::uint32_t> index;  ///< neighbour's cloud index (the point itself excluded)
+  std::vector<float> dist_sq;        ///< its squared distance [m^2]
+};
+
+}  // namespace detail
+
+inline FpfhResult compute_fpfh(const PointCloud& cloud, const FpfhSettings& settings,
+                               const std::vector<std::size_t>* indices) {
+  PLUMB_CHECK(settings.radius > 0.0f && std::isfinite(settings.radius),
+              "compute_fpfh: settings.radius = " << settings.radius << " must be > 0 and finite");
+  PLUMB_CHECK(!cloud.empty(), "compute_fpfh: the cloud is empty");
+  PLUMB_CHECK(cloud.has_normals(), "compute_fpfh: the cloud has no normals (compute_normals first)");
+  cloud.check_consistent("compute_fpfh");
+  const std::size_t n = cloud.size();
+  PLUMB_CHECK(n < std::numeric_limits<std::uint32_t>::max(),
+              "compute_fpfh: " << n << " points is too many (limit 2^32 - 1)");
+  if (indices != nullptr) {
+    for (std::size_t k = 0; k < indices->size(); ++k) {
+      PLUMB_CHECK((*indices)[k] < n, "compute_fpfh: indices[" << k << "] = " << (*indices)[k]
+                                                               << " out of range for " << n
+                                                               << " points");
+    }
+  }
+
+  FpfhResult out;
+  if (indices != nullptr) {
+    out.indices = *indices;
+  } else {
+    out.indices.resize(n);
+    for (std::size_t i = 0; i < n; ++i) out.indices[i] = i;
+  }
+  out.features.assign(out.indices.size(), FpfhSignature{});
+
+  // A point takes part (as query or neighbour) only with a finite position and normal.
+  std::vector<std::uint8_t> usable(n);
+  std::size_t num_usable = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    usable[i] = cloud.points[i].allFinite() && cloud.normals[i].allFinite();
+    num_usable += usable[i];
+  }
+  if (num_usable == 0) {
+    out.num_invalid = out.indices.size();
+    return out;
+  }
+  const KdTree<3> tree(cloud.points);
+
+  constexpr std::uint32_t kNoRow = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> row_of(n, kNoRow);
+  std::vector<std::uint32_t> row_point;  // cloud index of each row
+  detail::FpfhNeighborRows rows;
+  std::vector<std::size_t> found_idx;
+  std::vector<float> found_d2;
+  std::vector<std::pair<float, std::uint32_t>> cand;
+  const std::size_t cap = settings.max_neighbors;
+
+  // One radius search per point that needs an SPFH; the row keeps its neighbours (self excluded,
+  // nearest `cap` kept with self counted, as Open3D's hybrid search).
+  auto add_row = [&](std::size_t p) {
+    row_of[p] = static_cast<std::uint32_t>(row_point.size());
+    row_point.push_back(static_cast<std::uint32_t>(p));
+    const std::size_t m = tree.radius(cloud.points[p], settings.radius, found_idx, found_d2, false);
+    cand.clear();
+    bool self_found = false;
+    for (std::size_t j = 0; j < m; ++j) {
+      const std::size_t q = found_idx[j];
+      if (q == p) {
+        self_found = true;
+        continue;
+      }
+      if (!usable[q]) continue;
+      cand.emplace_back(found_d2[j], static_cast<std::uint32_t>(q));
+    }
+    // With the point itself counted, `cap` entries leave cap - 1 neighbours.
+    const std::size_t keep = (cap == 0) ? cand.size() : std::min(cand.size(), cap - (self_found ? 1 : 0));
+    if (keep < cand.size()) {
+      std::nth_element(cand.begin(), cand.begin() + static_cast<std::ptrdiff_t>(keep), cand.end());
+      cand.resize(keep);
+      std::sort(cand.begin(), cand.end());
+    }
+    for (const auto& c : cand) {
+      rows.index.push_back(c.second);
+      rows.dist_sq.push_back(c.first);
+    }
+    rows.begin.push_back(static_cast<std::uint32_t>(rows.index.size()));
+  };
+
+  for (std::size_t p : out.indices) {
+    if (usable[p] && row_of[p] == kNoRow) add_row(p);
+  }
+  const std::size_t num_query_rows = row_point.size();
+  for (std::size_t r = 0; r < num_query_rows; ++r) {
+    for (std::uint32_t e = rows.begin[r]; e < rows.begin[r + 1]; ++e) {
+      const std::uint32_t q = rows.index[e];
+      if (row_of[q] == kNoRow) add_row(q);
+    }
+  }
+
+  // SPFH per row (Rusu 2009 eq. for the simplified PFH), each sub-histogram normalised to 100.
+  const std::size_t num_rows = row_point.size();
+  std::vector<float> spfh(num_rows * kFpfhBins, 0.0f);
+  for (std::size_t r = 0; r < num_rows; ++r) {
+    const std::uint32_t b = rows.begin[r];
+    const std::uint32_t e = rows.begin[r + 1];
+    if (b == e) continue;
+    const std::size_t p = row_point[r];
+    const Vector3f& pp = cloud.points[p];
+    const Vector3f& np = cloud.normals[p];
+    const float incr = 100.0f / static_cast<float>(e - b);
+    float* h = &spfh[r * kFpfhBins];
+    for (std::uint32_t k = b; k < e; ++k) {
+      const std::uint32_t q = rows.index[k];
+      int bins[3];
+      detail::fpfh_pair_bins(pp, np, cloud.points[q], cloud.normals[q], bins);
+      h[bins[0]] += incr;
+      h[kFpfhBinsPerFeature + bins[1]] += incr;
+      h[2 * kFpfhBinsPerFeature + bins[2]] += incr;
+    }
+  }
+
+  // FPFH (SEEDS eq. 1 with Open3D's weighting and normalisation, see the header).
+  for (std::size_t f = 0; f < out.indices.size(); ++f) {
+    const std::size_t p = out.indices[f];
+    const std::uint32_t r = usable[p] ? row_of[p] : kNoRow;
+    if (r == kNoRow || rows.begin[r] == rows.begin[r + 1]) {
+      ++out.num_invalid;
+      continue;
+    }
+    double acc[kFpfhBins] = {};
+    for (std::uint32_t k = rows.begin[r]; k < rows.begin[r + 1]; ++k) {
+      const float d2 = rows.dist_sq[k];
+      if (d2 == 0.0f) continue;
+      const double wgt = 1.0 / static_cast<double>(d2);
+      const float* hq = &spfh[static_cast<std::size_t>(row_of[rows.index[k]]) * kFpfhBins];
+      for (int j = 0; j < kFpfhBins; ++j) acc[j] += wgt * static_cast<double>(hq[j]);
+    }
+    double scale[3];
+    for (int s = 0; s < 3; ++s) {
+      double sum = 0.0;
+      for (int j = 0; j < kFpfhBinsPerFeature; ++j) sum += acc[s * kFpfhBinsPerFeature + j];
+      scale[s] = sum != 0.0 ? 100.0 / sum : 0.0;
+    }
+    const float* hp = &spfh[static_cast<std::size_t>(r) * kFpfhBins];
+    FpfhSignature& sig = out.features[f];
+    for (int j = 0; j < kFpfhBins; ++j) {
+      sig[j] = static_cast<float>(acc[j] * scale[j / kFpfhBinsPerFeature]) + hp[j];
+    }
+  }
+  return out;
+}
+
+}  // namespace plumb
