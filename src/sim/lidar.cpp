@@ -1,0 +1,147 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "plumb/sim/lidar.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "plumb/core/error.hpp"
+
+namespace plumb::sim {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDeg = kPi / 180.0;
+
+std::vector<double> even_rows(int n, double lo_deg, double hi_deg) {
+  std::vector<double> el(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) el[static_cast<std::size_t>(i)] = (lo_deg + (hi_deg - lo_deg) * i / (n - 1)) * kDeg;
+  return el;
+}
+
+/// Reflectivity of each class, scaled so a head-on return reads 255 * albedo.
+float albedo_of(SimLabel label) {
+  switch (label) {
+    case kSimGround: return 0.35f;
+    case kSimWall: return 0.7f;
+    case kSimOtherElement: return 0.5f;
+    case kSimClutter: return 0.3f;
+    default: return 0.5f;
+  }
+}
+
+}  // namespace
+
+void LidarModel::validate() const {
+  PLUMB_CHECK(!elevations_rad.empty(), "LidarModel '" << name << "': elevations_rad is empty");
+  PLUMB_CHECK(elevations_rad.size() <= 65535, "LidarModel '" << name << "': " << elevations_rad.size()
+                                                             << " rows exceed the 16-bit ring index");
+  for (std::size_t r = 0; r < elevations_rad.size(); ++r) {
+    PLUMB_CHECK(std::isfinite(elevations_rad[r]) && std::abs(elevations_rad[r]) <= 0.5 * kPi,
+                "LidarModel '" << name << "': elevations_rad[" << r << "] = " << elevations_rad[r]
+                               << " is not in [-pi/2, pi/2]");
+  }
+  PLUMB_CHECK(columns >= 1, "LidarModel '" << name << "': columns " << columns << " must be >= 1");
+  PLUMB_CHECK(std::isfinite(rate_hz) && rate_hz > 0.0, "LidarModel '" << name << "': rate_hz " << rate_hz << " must be > 0");
+  PLUMB_CHECK(std::isfinite(min_range) && min_range >= 0.0,
+              "LidarModel '" << name << "': min_range " << min_range << " must be >= 0");
+  PLUMB_CHECK(max_range > min_range && !std::isnan(max_range),
+              "LidarModel '" << name << "': max_range " << max_range << " must exceed min_range " << min_range);
+  PLUMB_CHECK(std::isfinite(range_sigma) && range_sigma >= 0.0,
+              "LidarModel '" << name << "': range_sigma " << range_sigma << " must be >= 0");
+  PLUMB_CHECK(dropout >= 0.0 && dropout <= 1.0, "LidarModel '" << name << "': dropout " << dropout << " not in [0, 1]");
+  PLUMB_CHECK(std::isfinite(azimuth_offset_rad), "LidarModel '" << name << "': azimuth_offset_rad is not finite");
+}
+
+std::vector<std::string> lidar_preset_names() { return {"rfans32", "vlp16", "os1-64"}; }
+
+LidarModel lidar_preset(const std::string& name) {
+  LidarModel m;
+  m.name = name;
+  if (name == "rfans32") {
+    m.elevations_rad = even_rows(32, -20.0, 10.0);
+    m.columns = 2000;
+    m.rate_hz = 10.0;
+    m.min_range = 0.3;
+    m.max_range = 150.0;
+    m.range_sigma = 0.02;
+  } else if (name == "vlp16") {
+    m.elevations_rad = even_rows(16, -15.0, 15.0);
+    m.columns = 1800;
+    m.rate_hz = 10.0;
+    m.min_range = 0.5;
+    m.max_range = 100.0;
+    m.range_sigma = 0.03;
+  } else if (name == "os1-64") {
+    m.elevations_rad = even_rows(64, -16.6, 16.6);
+    m.columns = 1024;
+    m.rate_hz = 10.0;
+    m.min_range = 0.3;
+    m.max_range = 120.0;
+    m.range_sigma = 0.03;
+  } else {
+    std::ostringstream known;
+    for (const std::string& n : lidar_preset_names()) known << (known.tellp() > 0 ? ", " : "") << n;
+    PLUMB_THROW("lidar_preset: unknown LiDAR '" << name << "' (known: " << known.str() << ")");
+  }
+  return m;
+}
+
+PointCloud simulate_sweep(const World& world, const LidarModel& lidar,
+                          const std::function<Eigen::Isometry3d(double)>& T_world_lidar, double stamp, Rng& rng,
+                          const SweepSettings& settings) {
+  lidar.validate();
+  PLUMB_CHECK(static_cast<bool>(T_world_lidar), "simulate_sweep: T_world_lidar is empty");
+  PLUMB_CHECK(std::isfinite(stamp), "simulate_sweep: stamp " << stamp << " is not finite");
+  const std::size_t rows = lidar.elevations_rad.size();
+  const auto cols = static_cast<std::size_t>(lidar.columns);
+  const double cos_max_incidence = std::cos(settings.max_incidence_rad);
+  const bool noisy = settings.noise && lidar.range_sigma > 0.0;
+  const bool drops = settings.dropouts && lidar.dropout > 0.0;
+
+  std::vector<double> cos_el(rows), sin_el(rows);
+  for (std::size_t r = 0; r < rows; ++r) {
+    cos_el[r] = std::cos(lidar.elevations_rad[r]);
+    sin_el[r] = std::sin(lidar.elevations_rad[r]);
+  }
+  PointCloud cloud;
+  cloud.points.reserve(rows * cols);
+  cloud.intensities.reserve(rows * cols);
+  cloud.rings.reserve(rows * cols);
+  cloud.times.reserve(rows * cols);
+  cloud.labels.reserve(rows * cols);
+
+  const double column_dt = 1.0 / (static_cast<double>(cols) * lidar.rate_hz);
+  const Eigen::Isometry3d T_stamp = T_world_lidar(stamp);
+  for (std::size_t c = 0; c < cols; ++c) {
+    const double dt = static_cast<double>(c) * column_dt;
+    const Eigen::Isometry3d T = settings.motion_distortion ? T_world_lidar(stamp + dt) : T_stamp;
+    PLUMB_CHECK(T.matrix().allFinite(), "simulate_sweep: T_world_lidar(" << stamp + dt << ") is not finite");
+    const Matrix3d R = T.linear();
+    const Vector3d o = T.translation();
+    const double az = lidar.azimuth_offset_rad + 2.0 * kPi * static_cast<double>(c) / static_cast<double>(cols);
+    const double ca = std::cos(az), sa = std::sin(az);
+    for (std::size_t r = 0; r < rows; ++r) {
+      const Vector3d d_lidar(cos_el[r] * ca, cos_el[r] * sa, sin_el[r]);
+      const Vector3d d_world = R * d_lidar;
+      const RayHit hit = world.cast(o, d_world, lidar.max_range, stamp + dt);
+      if (!hit.hit()) continue;
+      const double cos_inc = -hit.normal.dot(d_world);
+      double range = hit.range;
+      if (noisy) range += lidar.range_sigma * rng.normal();
+      if (drops && rng.uniform() < lidar.dropout) continue;
+      if (cos_inc < cos_max_incidence) continue;
+      if (range < lidar.min_range || range >= lidar.max_range) continue;
+      const SimLabel label = world.label_of(hit);
+      cloud.points.push_back((range * d_lidar).cast<float>());
+      cloud.intensities.push_back(255.0f * albedo_of(label) * static_cast<float>(std::clamp(cos_inc, 0.0, 1.0)));
+      cloud.rings.push_back(static_cast<std::uint16_t>(r));
+      cloud.times.push_back(static_cast<float>(dt));
+      cloud.labels.push_back(static_cast<std::int32_t>(label));
+    }
+  }
+  return cloud;
+}
+
+}  // namespace plumb::sim

@@ -1,0 +1,414 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "plumb/sim/world.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <unordered_map>
+#include <utility>
+
+#include "plumb/core/error.hpp"
+#include "plumb/core/rng.hpp"
+
+namespace plumb::sim {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+std::string lower(const std::string& s) {
+  std::string out = s;
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+/// Furniture kinds: full width (along the wall), depth, height [m].
+struct FurnitureKind {
+  double width, depth, height;
+};
+constexpr FurnitureKind kFurniture[] = {
+    {1.6, 0.8, 0.75},  // desk
+    {1.0, 0.45, 1.9},  // cabinet
+    {1.2, 0.4, 2.0},   // shelf
+    {0.6, 0.6, 0.6},   // carton
+    {2.0, 0.9, 0.85},  // sofa / bench
+};
+
+Eigen::Matrix3d small_rotation(const Vector3d& w) {
+  const double a = w.norm();
+  if (a == 0.0) return Eigen::Matrix3d::Identity();
+  return Eigen::AngleAxisd(a, w / a).toRotationMatrix();
+}
+
+/// The 8 corners and 12 triangles (outward, counter-clockwise) of an oriented box.
+void append_box(const ClutterBox& box, std::vector<Vector3d>& vertices,
+                std::vector<std::array<std::uint32_t, 3>>& triangles) {
+  const auto base = static_cast<std::uint32_t>(vertices.size());
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(box.yaw, Vector3d::UnitZ()).toRotationMatrix();
+  for (int i = 0; i < 8; ++i) {
+    const Vector3d s((i & 1) ? 1.0 : -1.0, (i & 2) ? 1.0 : -1.0, (i & 4) ? 1.0 : -1.0);
+    vertices.push_back(box.center + R * s.cwiseProduct(box.half_size));
+  }
+  // Faces as corner quads (bit 0 = x, bit 1 = y, bit 2 = z), each wound outward.
+  const std::uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                     {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : quads) {
+    triangles.push_back({base + q[0], base + q[1], base + q[2]});
+    triangles.push_back({base + q[0], base + q[2], base + q[3]});
+  }
+}
+
+/// Distance in the xy plane from point p to the segment a-b.
+double segment_distance_xy(const Vector3d& p, const Vector3d& a, const Vector3d& b) {
+  const Vector2d ab = (b - a).head<2>(), ap = (p - a).head<2>();
+  const double len_sq = ab.squaredNorm();
+  const double s = len_sq > 0.0 ? std::clamp(ap.dot(ab) / len_sq, 0.0, 1.0) : 0.0;
+  return (ap - s * ab).norm();
+}
+
+double footprint_radius(const ClutterBox& b) { return b.half_size.head<2>().norm(); }
+
+}  // namespace
+
+SimLabel sim_class_of_type(const std::string& ifc_type) {
+  const std::string t = lower(ifc_type);
+  if (t == "ifcslab" || t == "ifcslabstandardcase" || t == "ifcslabelementedcase" || t == "ifccovering" ||
+      t == "ifcramp" || t == "ifcrampflight" || t == "ifcsite") {
+    return kSimGround;
+  }
+  if (t == "ifcwall" || t == "ifcwallstandardcase" || t == "ifcwallelementedcase" || t == "ifccurtainwall") {
+    return kSimWall;
+  }
+  return kSimOtherElement;
+}
+
+bool sim_type_is_transparent(const std::string& ifc_type) {
+  const std::string t = lower(ifc_type);
+  return t == "ifcwindow" || t == "ifcwindowstandardcase" || t == "ifcdoor" || t == "ifcdoorstandardcase" ||
+         t == "ifcopeningelement" || t == "ifcopeningstandardcase" || t == "ifcspace";
+}
+
+Vector3d Person::position(double time) const {
+  const double len = (b - a).norm();
+  if (!(len > 0.0) || !(speed > 0.0)) return a;
+  const double period = 2.0 * len;
+  double s = std::fmod((time + phase) * speed, period);
+  if (s < 0.0) s += period;
+  const double d = s <= len ? s : period - s;
+  return a + (b - a) * (d / len);
+}
+
+World::World(const bim::BimMesh& mesh, const WorldSettings& settings)
+    : bim_(std::make_shared<bim::BimMesh>(mesh)), settings_(settings) {
+  const WorldSettings& s = settings_;
+  PLUMB_CHECK(std::isfinite(s.as_built_sigma_m) && s.as_built_sigma_m >= 0.0,
+              "World: settings.as_built_sigma_m " << s.as_built_sigma_m << " must be finite and >= 0");
+  PLUMB_CHECK(std::isfinite(s.as_built_sigma_rad) && s.as_built_sigma_rad >= 0.0,
+              "World: settings.as_built_sigma_rad " << s.as_built_sigma_rad << " must be finite and >= 0");
+  PLUMB_CHECK(std::isfinite(s.clutter) && s.clutter >= 0.0,
+              "World: settings.clutter " << s.clutter << " must be finite and >= 0");
+  PLUMB_CHECK(s.num_people >= 0, "World: settings.num_people " << s.num_people << " must be >= 0");
+  PLUMB_CHECK(s.person_speed > 0.0 && s.person_radius > 0.0 && s.person_height > 0.0 &&
+                  std::isfinite(s.person_speed + s.person_radius + s.person_height),
+              "World: person speed, radius and height must be finite and > 0");
+  PLUMB_CHECK(s.storey >= -1 && s.storey < static_cast<int>(mesh.storeys.size()),
+              "World: settings.storey " << s.storey << " but the model has " << mesh.storeys.size()
+                                        << " storeys (-1 = all)");
+  PLUMB_CHECK(mesh.triangle_element.size() == mesh.triangles.size(),
+              "World: mesh has " << mesh.triangle_element.size() << " triangle elements for "
+                                 << mesh.triangles.size() << " triangles");
+  const std::size_t num_elements = mesh.elements.size();
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    PLUMB_CHECK(mesh.triangle_element[t] >= -1 && mesh.triangle_element[t] < static_cast<std::int64_t>(num_elements),
+                "World: triangle " << t << " has element " << mesh.triangle_element[t] << " of " << num_elements);
+  }
+
+  Rng rng(s.seed);
+  // As-built deviations: each element turned about its bounding-box centre and shifted.
+  element_class_.resize(num_elements);
+  deviation_.assign(num_elements, Eigen::Isometry3d::Identity());
+  std::vector<Eigen::Matrix3d> rot_minus_identity(num_elements, Eigen::Matrix3d::Zero());
+  std::vector<Vector3d> center(num_elements, Vector3d::Zero()), shift(num_elements, Vector3d::Zero());
+  const bool perturb = s.as_built_sigma_m > 0.0 || s.as_built_sigma_rad > 0.0;
+  for (std::size_t e = 0; e < num_elements; ++e) {
+    const bim::BimElement& el = mesh.elements[e];
+    element_class_[e] = sim_class_of_type(el.type);
+    if (!perturb) continue;
+    const Vector3d w(rng.normal(), rng.normal(), rng.normal());
+    const Vector3d t(rng.normal(), rng.normal(), rng.normal());
+    const Eigen::Matrix3d R = small_rotation(w * s.as_built_sigma_rad);
+    center[e] = (el.bbox_min.allFinite() && el.bbox_max.allFinite()) ? Vector3d(0.5 * (el.bbox_min + el.bbox_max))
+                                                                      : Vector3d::Zero();
+    shift[e] = t * s.as_built_sigma_m;
+    rot_minus_identity[e] = R - Eigen::Matrix3d::Identity();
+    // p' = R (p - c) + c + t
+    deviation_[e].linear() = R;
+    deviation_[e].translation() = center[e] - R * center[e] + shift[e];
+  }
+
+  // The as-built BIM triangles: transparent elements left out, vertices per element so each moves
+  // with its element (an element stays watertight; neighbours may open hairline gaps, as built).
+  std::vector<Vector3d> vertices;
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+  std::vector<std::int32_t> tri_element;
+  std::unordered_map<std::uint64_t, std::uint32_t> remap;
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const std::int32_t e = mesh.triangle_element[t];
+    if (e >= 0 && sim_type_is_transparent(mesh.elements[static_cast<std::size_t>(e)].type)) continue;
+    std::array<std::uint32_t, 3> tri{};
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t v = mesh.triangles[t][static_cast<std::size_t>(k)];
+      PLUMB_CHECK(v < mesh.vertices.size(), "World: triangle " << t << " uses vertex " << v << " of "
+                                                               << mesh.vertices.size());
+      const std::uint64_t key = (static_cast<std::uint64_t>(static_cast<std::uint32_t>(e)) << 32) | v;
+      auto [it, inserted] = remap.try_emplace(key, static_cast<std::uint32_t>(vertices.size()));
+      if (inserted) {
+        const Vector3d& p = mesh.vertices[v];
+        if (e >= 0 && perturb) {
+          const auto ue = static_cast<std::size_t>(e);
+          vertices.push_back(p + rot_minus_identity[ue] * (p - center[ue]) + shift[ue]);
+        } else {
+          vertices.push_back(p);
+        }
+      }
+      tri[static_cast<std::size_t>(k)] = it->second;
+    }
+    triangles.push_back(tri);
+    tri_element.push_back(e);
+    caster_to_bim_triangle_.push_back(static_cast<std::uint32_t>(t));
+  }
+  num_caster_bim_triangles_ = static_cast<std::uint32_t>(triangles.size());
+
+  const bool want_clutter = s.clutter > 0.0 || s.num_people > 0;
+  if (want_clutter && !triangles.empty()) {
+    const RayCaster bim_caster(vertices, triangles, tri_element, s.caster);
+
+    // Floor triangles (as built, facing up) of the chosen storey, weighted by area.
+    std::vector<std::uint32_t> floor_tri;
+    std::vector<double> cum_area;
+    double total_area = 0.0;
+    for (std::uint32_t t = 0; t < num_caster_bim_triangles_; ++t) {
+      const std::int32_t e = tri_element[t];
+      if (e < 0 || element_class_[static_cast<std::size_t>(e)] != kSimGround) continue;
+      if (s.storey >= 0 && mesh.elements[static_cast<std::size_t>(e)].storey != s.storey) continue;
+      const Vector3d& a = vertices[triangles[t][0]];
+      const Vector3d n = (vertices[triangles[t][1]] - a).cross(vertices[triangles[t][2]] - a);
+      const double area2 = n.norm();
+      if (!(area2 > 0.0) || n.z() < 0.95 * area2) continue;  // upward within ~18 deg
+      total_area += 0.5 * area2;
+      floor_tri.push_back(t);
+      cum_area.push_back(total_area);
+    }
+    // Door boxes (nominal), grown by a margin: no furniture there.
+    std::vector<std::pair<Vector3d, Vector3d>> door_boxes;
+    for (const bim::BimElement& el : mesh.elements) {
+      const std::string t = lower(el.type);
+      if ((t == "ifcdoor" || t == "ifcdoorstandardcase") && el.bbox_min.allFinite() && el.bbox_max.allFinite()) {
+        door_boxes.emplace_back(el.bbox_min - Vector3d::Constant(1.0), el.bbox_max + Vector3d::Constant(1.0));
+      }
+    }
+    auto near_door = [&](const Vector3d& p, double r) {
+      for (const auto& [lo, hi] : door_boxes) {
+        if (p.x() > lo.x() - r && p.x() < hi.x() + r && p.y() > lo.y() - r && p.y() < hi.y() + r &&
+            p.z() > lo.z() - 0.5 && p.z() < hi.z()) {
+          return true;
+        }
+      }
+      return false;
+    };
+    // A random floor point with head room: the floor is the top surface there and a ceiling lies
+    // 2..6 m above (so the point is indoors).
+    auto sample_floor = [&](Vector3d& p) -> bool {
+      if (floor_tri.empty()) return false;
+      const double u = rng.uniform(0.0, total_area);
+      const std::size_t i = std::min<std::size_t>(
+          floor_tri.size() - 1,
+          static_cast<std::size_t>(std::upper_bound(cum_area.begin(), cum_area.end(), u) - cum_area.begin()));
+      const auto& tri = triangles[floor_tri[i]];
+      double r1 = rng.uniform(), r2 = rng.uniform();
+      if (r1 + r2 > 1.0) { r1 = 1.0 - r1; r2 = 1.0 - r2; }
+      const Vector3d q = vertices[tri[0]] + r1 * (vertices[tri[1]] - vertices[tri[0]]) +
+                         r2 * (vertices[tri[2]] - vertices[tri[0]]);
+      const RayHit down = bim_caster.cast(q + Vector3d(0, 0, 0.5), -Vector3d::UnitZ(), 1.0);
+      if (!down.hit() || std::abs(down.range - 0.5) > 0.02) return false;
+      p = q + Vector3d(0, 0, 0.5 - down.range);
+      const RayHit up = bim_caster.cast(p + Vector3d(0, 0, 0.01), Vector3d::UnitZ(), 6.0);
+      return up.hit() && up.range > 2.0;
+    };
+    // Floor under the whole of a footprint point and nothing standing there up to `height`.
+    auto column_clear = [&](const Vector3d& floor_point, double height) {
+      const RayHit down = bim_caster.cast(floor_point + Vector3d(0, 0, height), -Vector3d::UnitZ(), height + 0.2);
+      return down.hit() && std::abs(down.range - height) < 0.03;
+    };
+
+    // Furniture against walls.
+    const auto target = static_cast<std::size_t>(std::llround(s.clutter * total_area / 10.0));
+    const std::size_t max_attempts = 60 * target + 100;
+    for (std::size_t attempt = 0; attempt < max_attempts && clutter_.size() < target; ++attempt) {
+      Vector3d p;
+      if (!sample_floor(p)) continue;
+      const FurnitureKind kind = kFurniture[rng.uniform_index(std::size(kFurniture))];
+      // Nearest wall-like surface at knee height, 16 directions.
+      double nearest = kInf;
+      Vector3d wall_normal = Vector3d::Zero();
+      for (int k = 0; k < 16; ++k) {
+        const double az = 2.0 * kPi * k / 16.0;
+        const Vector3d d(std::cos(az), std::sin(az), 0.0);
+        const RayHit h = bim_caster.cast(p + Vector3d(0, 0, 0.4), d, 3.0);
+        if (h.hit() && h.range < nearest) {
+          const Vector3d n(h.normal.x(), h.normal.y(), 0.0);
+          if (n.norm() < 0.7) continue;
+          wall_normal = n.normalized();
+          nearest = h.range * std::abs(d.dot(wall_normal));  // distance to the wall plane
+        }
+      }
+      if (!(nearest < 3.0)) continue;
+      // Back against that wall, 3 cm off it, its front facing the room.
+      const double yaw = std::atan2(wall_normal.y(), wall_normal.x()) - 0.5 * kPi;
+      // Move p onto the wall plane and back out by depth / 2 + gap.
+      const Vector3d foot = p - wall_normal * (nearest - (0.5 * kind.depth + 0.03));
+      ClutterBox box;
+      box.half_size = Vector3d(0.5 * kind.width, 0.5 * kind.depth, 0.5 * kind.height);
+      box.yaw = yaw;
+      box.center = foot + Vector3d(0, 0, box.half_size.z());
+      const Eigen::Matrix3d R = Eigen::AngleAxisd(yaw, Vector3d::UnitZ()).toRotationMatrix();
+      // Floor everywhere under the footprint and nothing inside the box.
+      bool ok = true;
+      for (int i = 0; i < 9 && ok; ++i) {
+        const Vector3d local(((i % 3) - 1) * 0.95 * box.half_size.x(), ((i / 3) - 1) * 0.95 * box.half_size.y(), 0.0);
+        ok = column_clear(foot + R * local, kind.height + 0.05);
+      }
+      if (!ok) continue;
+      const Vector3d front = box.center + wall_normal * box.half_size.y();
+      if (bim_caster.occluded(Vector3d(front.x(), front.y(), foot.z() + 0.3), wall_normal, 1.0)) continue;
+      if (near_door(box.center, footprint_radius(box))) continue;
+      for (const ClutterBox& other : clutter_) {
+        if ((other.center - box.center).head<2>().norm() < footprint_radius(other) + footprint_radius(box) + 0.1 &&
+            std::abs(other.center.z() - box.center.z()) < 1.0) {
+          ok = false;
+          break;
+        }
+      }
+      if (!ok) continue;
+      clutter_.push_back(box);
+    }
+
+    // People: straight free walks of 2..8 m.
+    for (int person = 0, attempt = 0; person < s.num_people && attempt < 400 * s.num_people; ++attempt) {
+      Vector3d p;
+      if (!sample_floor(p)) continue;
+      const double az = rng.uniform(0.0, 2.0 * kPi);
+      const Vector3d d(std::cos(az), std::sin(az), 0.0);
+      const Vector3d side(-d.y(), d.x(), 0.0);
+      double reach[2] = {8.0, 8.0};
+      for (int dir = 0; dir < 2; ++dir) {
+        const Vector3d u = dir == 0 ? d : Vector3d(-d);
+        for (double h : {0.3, 1.2}) {
+          for (double off : {-s.person_radius, 0.0, s.person_radius}) {
+            const RayHit hit = bim_caster.cast(p + Vector3d(0, 0, h) + side * off, u, 8.0);
+            if (hit.hit()) reach[dir] = std::min(reach[dir], hit.range);
+          }
+        }
+        reach[dir] = std::max(0.0, std::min(4.0, reach[dir] - s.person_radius - 0.3));
+      }
+      const Vector3d a = p + d * reach[0], b = p - d * reach[1];
+      if ((a - b).norm() < 2.0) continue;
+      bool ok = !near_door(a, s.person_radius) && !near_door(b, s.person_radius);
+      for (int k = 0; k <= 8 && ok; ++k) {  // level floor and head room along the walk
+        const Vector3d q = a + (b - a) * (k / 8.0);
+        ok = column_clear(q, s.person_height + 0.05);
+      }
+      for (const ClutterBox& box : clutter_) {
+        if (!ok) break;
+        ok = segment_distance_xy(box.center, a, b) > footprint_radius(box) + s.person_radius + 0.1 ||
+             std::abs(box.center.z() - a.z()) > 2.5;
+      }
+      if (!ok) continue;
+      Person walker;
+      walker.a = a;
+      walker.b = b;
+      walker.speed = s.person_speed;
+      walker.radius = s.person_radius;
+      walker.height = s.person_height;
+      walker.phase = rng.uniform(0.0, 2.0 * (a - b).norm() / s.person_speed);
+      people_.push_back(walker);
+      ++person;
+    }
+  }
+
+  for (const ClutterBox& box : clutter_) {
+    append_box(box, vertices, triangles);
+    for (int j = 0; j < 12; ++j) tri_element.push_back(-1);
+  }
+  caster_ = std::make_shared<const RayCaster>(std::move(vertices), std::move(triangles), std::move(tri_element),
+                                              s.caster);
+}
+
+RayHit World::cast(const Vector3d& origin, const Vector3d& unit_dir, double t_max, double time) const {
+  RayHit hit = caster_->cast(origin, unit_dir, t_max);
+  const auto num_bim = static_cast<std::uint32_t>(bim_->triangles.size());
+  if (hit.hit()) {
+    if (hit.triangle < num_caster_bim_triangles_) {
+      hit.triangle = caster_to_bim_triangle_[hit.triangle];
+    } else {
+      hit.triangle = num_bim + (hit.triangle - num_caster_bim_triangles_);
+      hit.element = -1;
+    }
+  }
+  if (people_.empty() || !origin.allFinite() || !unit_dir.allFinite()) return hit;
+  double best = std::min(hit.range, t_max);
+  const auto first_person = static_cast<std::uint32_t>(num_bim + 12 * clutter_.size());
+  for (std::size_t i = 0; i < people_.size(); ++i) {
+    const Person& person = people_[i];
+    const Vector3d f = person.position(time);
+    const double r = person.radius;
+    const double z0 = f.z(), z1 = f.z() + person.height;
+    const double px = origin.x() - f.x(), py = origin.y() - f.y();
+    const double c = px * px + py * py - r * r;
+    if (c <= 0.0) continue;  // the origin stands inside this person: ignore them
+    const double a = unit_dir.x() * unit_dir.x() + unit_dir.y() * unit_dir.y();
+    const double b = px * unit_dir.x() + py * unit_dir.y();
+    double t_hit = kInf;
+    Vector3d n = Vector3d::Zero();
+    if (a > 0.0) {
+      const double disc = b * b - a * c;
+      if (disc >= 0.0) {
+        const double t = (-b - std::sqrt(disc)) / a;
+        const double z = origin.z() + t * unit_dir.z();
+        if (t > 0.0 && z >= z0 && z <= z1) {
+          t_hit = t;
+          n = Vector3d(px + t * unit_dir.x(), py + t * unit_dir.y(), 0.0) / r;
+        }
+      }
+    }
+    if (unit_dir.z() < 0.0 && origin.z() > z1) {  // the head (top cap) from above
+      const double t = (z1 - origin.z()) / unit_dir.z();
+      const double qx = px + t * unit_dir.x(), qy = py + t * unit_dir.y();
+      if (t > 0.0 && t < t_hit && qx * qx + qy * qy <= r * r) {
+        t_hit = t;
+        n = Vector3d::UnitZ();
+      }
+    }
+    if (t_hit < best) {
+      best = t_hit;
+      hit.range = t_hit;
+      hit.triangle = first_person + static_cast<std::uint32_t>(i);
+      hit.element = -1;
+      hit.normal = n;
+    }
+  }
+  return hit;
+}
+
+SimLabel World::label_of(const RayHit& hit) const {
+  if (!hit.hit()) return kSimOther;
+  if (hit.element < 0) {
+    return hit.triangle >= bim_->triangles.size() ? kSimClutter : kSimOther;
+  }
+  const SimLabel cls = element_class_[static_cast<std::size_t>(hit.element)];
+  if (cls == kSimGround) return hit.normal.z() > 0.7 ? kSimGround : kSimOtherElement;
+  return cls;
+}
+
+}  // namespace plumb::sim
