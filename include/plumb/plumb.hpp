@@ -32,6 +32,7 @@
 #include "plumb/io/pcd.hpp"
 #include "plumb/io/ply.hpp"
 #include "plumb/io/trajectory.hpp"
+#include "plumb/io/wheel_encoders.hpp"
 
 #include "plumb/eval/align.hpp"
 #include "plumb/eval/kitti_segments.hpp"
@@ -49,3 +50,5 @@
 #include "plumb/bim/polygon.hpp"
 #include "plumb/bim/sample.hpp"
 #include "plumb/bim/step.hpp"
+
+#include "plumb/pipeline/pose_composer.hpp"
