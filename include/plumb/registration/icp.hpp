@@ -1,0 +1,83 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+/// @file
+/// @brief Overlap-gated conditional-loop ICP (SEEDS A1.6), point-to-point (Horn) or point-to-plane.
+
+#include <cstddef>
+#include <cstdint>
+
+#include <Eigen/Geometry>
+
+#include "plumb/core/point_cloud.hpp"
+#include "plumb/core/status.hpp"
+#include "plumb/registration/kernels.hpp"
+#include "plumb/search/kdtree.hpp"
+
+namespace plumb {
+
+/// @brief Error metric of align_icp().
+enum class IcpMethod {
+  kPointToPoint,  ///< SEEDS eq. 3/7, solved in closed form by Horn's quaternion method (eq. 5-6)
+  kPointToPlane,  ///< (n_q . (T p - q))^2, one linearised Gauss-Newton step per iteration; needs target normals
+};
+
+/// @brief Settings of align_icp(). Defaults suit metric indoor scans voxelised to ~0.1 m.
+struct IcpSettings {
+  IcpMethod method = IcpMethod::kPointToPoint;  ///< error metric
+  double max_correspondence_distance = 1.0;     ///< d of the first round: pairs farther apart are ignored [m]
+  double distance_step = 0.1;                   ///< Δd: d shrinks by this when the overlap gate fails [m]
+  double min_correspondence_distance = 0.1;     ///< d never goes below this; reaching it ends the rounds [m]
+  int max_rounds = 10;                          ///< most rounds (runs of steps 1-3 at one d), >= 1
+  int max_iterations = 50;                      ///< N_max: iterations per round, >= 1
+  /// tau: a round stops when the mean squared residual changes by less than this between two
+  /// iterations, |d_k - d_{k+1}| < tau [m^2] (the seed's criterion, with |.| so that a growing
+  /// error does not count as convergence)
+  double tolerance = 1e-7;
+  double min_step = 1e-6;                 ///< a round also stops when an update moves less than this [m] / [rad]
+  double min_overlap = 0.9;               ///< c: accepted when the overlap ratio is >= c, in [0, 1]
+  double overlap_distance = 0.1;          ///< beta of the overlap ratio (SEEDS A1.5) [m]
+  /// Pairs whose normals differ by more than this are rejected (SEEDS A1.6 step 2) [rad]; used only
+  /// when both clouds have normals; the sign of a normal is ignored (scans and models orient differently).
+  double max_normal_angle = 0.785398163397448;  // 45 deg
+  RobustKernel kernel = RobustKernel::kNone;    ///< IRLS weights on the residuals
+  double kernel_scale = 0.05;                   ///< scale of the robust kernel [m]
+  std::size_t min_correspondences = 6;          ///< fewer pairs → Status::kInsufficientData
+  /// smallest eigenvalue of the per-pair 6x6 normal matrix below which the result is
+  /// Status::kDegenerate (0 disables the gate); see IcpResult::degeneracy
+  double degeneracy_threshold = 0.0;
+};
+
+/// @brief Result of align_icp().
+struct IcpResult {
+  Eigen::Isometry3d T_target_source = Eigen::Isometry3d::Identity();  ///< estimate (T_init when nothing was solved)
+  Status status = Status::kInsufficientData;  ///< kOk: converged, overlap >= c, not degenerate
+  bool converged = false;        ///< the last round met the stopping criterion (tau or min_step)
+  int iterations = 0;            ///< iterations over all rounds
+  int rounds = 0;                ///< rounds run (1 + times the overlap gate shrank d)
+  std::size_t num_inliers = 0;   ///< correspondences at the final estimate within the final d
+  double overlap = 0.0;          ///< overlap ratio at the final estimate (beta = overlap_distance), [0, 1]
+  double rmse = 0.0;             ///< RMS residual of those correspondences (metric of `method`) [m]
+  double final_correspondence_distance = 0.0;  ///< d of the last round [m]
+  /// Degeneracy indicator: smallest eigenvalue of the 6x6 normal matrix J^T J / num_inliers at
+  /// the final correspondences (rotation about their centroid, then translation). Near 0 means
+  /// a direction the geometry does not constrain (corridor, single plane).
+  double degeneracy = 0.0;
+};
+
+/// @brief Align `source` to `target` from `T_init` (SEEDS A1.6): nearest neighbours within d,
+///        normal-angle rejection, closed-form/linearised solve until |d_k - d_{k+1}| < tau or
+///        N_max; then the overlap ratio; if it is below c, shrink d by Δd and run again.
+/// @param target_tree kd-tree built on `target.points`
+/// @throws plumb::Error for misuse: tree/cloud mismatch, bad settings, non-finite T_init,
+///         point-to-plane without target normals, inconsistent cloud fields
+/// @note Deterministic; single-threaded; O(iterations * n log m).
+IcpResult align_icp(const PointCloud& source, const PointCloud& target, const KdTree3f& target_tree,
+                    const Eigen::Isometry3d& T_init, const IcpSettings& settings = {});
+
+/// @brief align_icp() that builds the target kd-tree itself.
+IcpResult align_icp(const PointCloud& source, const PointCloud& target,
+                    const Eigen::Isometry3d& T_init, const IcpSettings& settings = {});
+
+}  // namespace plumb
+
+#include "plumb/registration/impl/icp_impl.hpp"

@@ -1,0 +1,369 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Horn's closed form, robust kernels, the overlap ratio and ICP on synthetic data with known answers.
+
+#include <cmath>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "plumb/core/error.hpp"
+#include "plumb/core/lie.hpp"
+#include "plumb/core/rng.hpp"
+#include "plumb/registration/horn.hpp"
+#include "plumb/registration/icp.hpp"
+#include "plumb/registration/kernels.hpp"
+#include "plumb/registration/overlap.hpp"
+
+namespace plumb {
+namespace {
+
+// ---- helpers: random poses, pose errors and a synthetic room with clutter ----------------------
+
+Eigen::Isometry3d random_pose(Rng& rng, double max_translation, double max_angle) {
+  Vector3d axis(rng.normal(), rng.normal(), rng.normal());
+  axis.normalize();
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(rng.uniform(-max_angle, max_angle), axis).toRotationMatrix();
+  T.translation() = Vector3d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)) * max_translation;
+  return T;
+}
+
+/// (translation error [m], rotation error [rad]) of a against b.
+std::pair<double, double> pose_error(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  const Eigen::Isometry3d d = b.inverse() * a;
+  return {d.translation().norm(), Eigen::AngleAxisd(d.linear()).angle()};
+}
+
+/// Random samples (about one per spacing^2) of a 6 x 4 x 3 m room with a pillar, a cabinet and a
+/// step, so that no symmetry leaves the pose ambiguous; normals are the face normals.
+PointCloud room_cloud(double spacing, std::uint64_t seed) {
+  Rng rng(seed);
+  PointCloud c;
+  auto rect = [&](Vector3d o, Vector3d u, Vector3d v) {
+    const Vector3d n = u.cross(v).normalized();
+    const int num = static_cast<int>(u.norm() * v.norm() / (spacing * spacing));
+    for (int i = 0; i < num; ++i) {
+      c.points.push_back((o + rng.uniform() * u + rng.uniform() * v).cast<float>());
+      c.normals.push_back(n.cast<float>());
+    }
+  };
+  auto box = [&](Vector3d lo, Vector3d hi) {  // the five faces other than the bottom
+    const Vector3d e = hi - lo;
+    rect(lo, Vector3d(e.x(), 0, 0), Vector3d(0, 0, e.z()));
+    rect(lo + Vector3d(0, e.y(), 0), Vector3d(e.x(), 0, 0), Vector3d(0, 0, e.z()));
+    rect(lo, Vector3d(0, e.y(), 0), Vector3d(0, 0, e.z()));
+    rect(lo + Vector3d(e.x(), 0, 0), Vector3d(0, e.y(), 0), Vector3d(0, 0, e.z()));
+    rect(lo + Vector3d(0, 0, e.z()), Vector3d(e.x(), 0, 0), Vector3d(0, e.y(), 0));
+  };
+  rect({0, 0, 0}, {6, 0, 0}, {0, 4, 0});  // floor
+  rect({0, 0, 3}, {6, 0, 0}, {0, 4, 0});  // ceiling
+  rect({0, 0, 0}, {6, 0, 0}, {0, 0, 3});
+  rect({0, 4, 0}, {6, 0, 0}, {0, 0, 3});
+  rect({0, 0, 0}, {0, 4, 0}, {0, 0, 3});
+  rect({6, 0, 0}, {0, 4, 0}, {0, 0, 3});
+  box({1.0, 1.0, 0.0}, {1.4, 1.3, 3.0});   // pillar
+  box({4.0, 3.0, 0.0}, {5.5, 3.6, 1.2});   // cabinet
+  box({2.5, 0.0, 0.0}, {3.5, 0.8, 0.4});   // step
+  return c;
+}
+
+TEST(HornTest, RecoversKnownTransform) {
+  Rng rng(1);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Eigen::Isometry3d T = random_pose(rng, 10.0, M_PI);
+    std::vector<Vector3d> p, q;
+    for (int i = 0; i < 3 + trial; ++i) {
+      p.emplace_back(rng.uniform(-5, 5), rng.uniform(-5, 5), rng.uniform(-5, 5));
+      q.push_back(T * p.back());
+    }
+    const HornResult h = horn_align(p, q);
+    ASSERT_TRUE(h.valid);
+    EXPECT_EQ(h.num_pairs, p.size());
+    EXPECT_LT((h.T_target_source.matrix() - T.matrix()).cwiseAbs().maxCoeff(), 1e-9);
+    EXPECT_LT(h.rmse, 1e-6);
+  }
+}
+
+TEST(HornTest, MatchesLeastSquaresOptimumUnderNoise) {
+  // Noisy pairs: the closed form must be a stationary point of the squared error, so no small
+  // perturbation of it does better; its reported rmse must equal the one recomputed.
+  Rng rng(2);
+  const Eigen::Isometry3d T = random_pose(rng, 3.0, 1.0);
+  std::vector<Vector3d> p, q;
+  for (int i = 0; i < 200; ++i) {
+    p.emplace_back(rng.uniform(-5, 5), rng.uniform(-5, 5), rng.uniform(-1, 1));
+    q.push_back(T * p.back() + Vector3d(rng.normal(0, 0.05), rng.normal(0, 0.05), rng.normal(0, 0.05)));
+  }
+  const HornResult h = horn_align(p, q);
+  ASSERT_TRUE(h.valid);
+  auto sse = [&](const Eigen::Isometry3d& X) {
+    double s = 0;
+    for (std::size_t i = 0; i < p.size(); ++i) s += (X * p[i] - q[i]).squaredNorm();
+    return s;
+  };
+  const double best = sse(h.T_target_source);
+  EXPECT_NEAR(h.rmse, std::sqrt(best / 200.0), 1e-9);
+  for (int k = 0; k < 6; ++k) {
+    for (double eps : {1e-3, -1e-3}) {
+      Vector6d xi = Vector6d::Zero();
+      xi(k) = eps;
+      Eigen::Isometry3d D = Eigen::Isometry3d::Identity();
+      D.linear() = so3::exp(xi.tail<3>());
+      D.translation() = xi.head<3>();
+      EXPECT_GT(sse(D * h.T_target_source), best);
+    }
+  }
+}
+
+TEST(HornTest, ZeroWeightIgnoresOutlier) {
+  Rng rng(3);
+  const Eigen::Isometry3d T = random_pose(rng, 2.0, 2.0);
+  std::vector<Vector3d> p, q;
+  std::vector<double> w;
+  for (int i = 0; i < 10; ++i) {
+    p.emplace_back(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+    q.push_back(T * p.back());
+    w.push_back(1.0);
+  }
+  q[4] += Vector3d(5, 5, 5);
+  w[4] = 0.0;
+  const HornResult h = horn_align(p, q, &w);
+  ASSERT_TRUE(h.valid);
+  EXPECT_EQ(h.num_pairs, 9u);
+  EXPECT_LT((h.T_target_source.matrix() - T.matrix()).cwiseAbs().maxCoeff(), 1e-9);
+}
+
+TEST(HornTest, DegenerateInputIsInvalid) {
+  std::vector<Vector3d> p = {{0, 0, 0}, {1, 0, 0}};
+  EXPECT_FALSE(horn_align(p, p).valid);  // < 3 pairs
+  p = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0}};
+  EXPECT_FALSE(horn_align(p, p).valid);  // collinear
+  p = {{1, 1, 1}, {1, 1, 1}, {1, 1, 1}};
+  EXPECT_FALSE(horn_align(p, p).valid);  // coincident
+  const std::vector<Vector3d> q = {{0, 0, 0}};
+  EXPECT_THROW(horn_align(p, q), Error);
+  std::vector<Vector3d> bad = p;
+  bad[1].x() = std::nan("");
+  EXPECT_THROW(horn_align(bad, p), Error);
+}
+
+TEST(KernelsTest, HuberMatchesSeedEquation) {
+  const double m1 = 0.3;
+  EXPECT_DOUBLE_EQ(huber_penalty(0.1, m1), 0.005);
+  EXPECT_DOUBLE_EQ(huber_penalty(-0.1, m1), 0.005);
+  EXPECT_DOUBLE_EQ(huber_penalty(1.0, m1), 0.3 * (2.0 - 0.3) / 2.0);
+  // Continuous with a continuous derivative at m1.
+  EXPECT_NEAR(huber_penalty(m1 - 1e-9, m1), huber_penalty(m1 + 1e-9, m1), 1e-8);
+  const double h = 1e-6;
+  const double left = (huber_penalty(m1 - h, m1) - huber_penalty(m1 - 2 * h, m1)) / h;
+  const double right = (huber_penalty(m1 + 2 * h, m1) - huber_penalty(m1 + h, m1)) / h;
+  EXPECT_NEAR(left, right, 1e-5);
+}
+
+TEST(KernelsTest, WeightIsDerivativeOverResidual) {
+  // Huber: rho = huber_penalty; w(r) = rho'(r) / r, checked numerically.
+  const double s = 0.2;
+  for (double r : {0.05, 0.19, 0.25, 1.0, 3.0}) {
+    const double h = 1e-7;
+    const double drho = (huber_penalty(r + h, s) - huber_penalty(r - h, s)) / (2 * h);
+    EXPECT_NEAR(robust_weight(RobustKernel::kHuber, r, s), drho / r, 1e-6) << r;
+    // Cauchy: rho = s^2/2 log(1 + (r/s)^2).
+    auto cauchy = [&](double x) { return 0.5 * s * s * std::log1p((x / s) * (x / s)); };
+    EXPECT_NEAR(robust_weight(RobustKernel::kCauchy, r, s), (cauchy(r + h) - cauchy(r - h)) / (2 * h) / r, 1e-6);
+  }
+  EXPECT_EQ(robust_weight(RobustKernel::kTukey, 0.3, 0.2), 0.0);
+  EXPECT_EQ(robust_weight(RobustKernel::kTukey, 0.0, 0.2), 1.0);
+  EXPECT_EQ(robust_weight(RobustKernel::kNone, 100.0, 0.2), 1.0);
+  EXPECT_EQ(robust_weight(RobustKernel::kHuber, std::nan(""), 0.2), 0.0);
+}
+
+TEST(OverlapTest, CountsPointsWithinBeta) {
+  PointCloud target;
+  for (int i = 0; i < 10; ++i)
+    for (int j = 0; j < 10; ++j) target.points.emplace_back(0.5f * i, 0.5f * j, 0.0f);
+  const KdTree3f tree(target);
+  PointCloud source;
+  // 30 points 0.05 above grid points, 10 points 1 m above, 1 NaN point (not counted).
+  for (int k = 0; k < 30; ++k) source.points.emplace_back(0.5f * (k % 10), 0.5f * (k / 10), 0.05f);
+  for (int k = 0; k < 10; ++k) source.points.emplace_back(0.5f * k, 0.0f, 1.0f);
+  source.points.emplace_back(std::nanf(""), 0.0f, 0.0f);
+  OverlapResult r = overlap_ratio(source, tree, Eigen::Isometry3d::Identity(), 0.1);
+  EXPECT_EQ(r.num_valid, 40u);
+  EXPECT_EQ(r.num_inliers, 30u);
+  EXPECT_DOUBLE_EQ(r.overlap, 0.75);
+  EXPECT_NEAR(r.rmse, 0.05, 1e-6);
+  // Shifting the source down by 1 m moves the other ten onto the grid instead.
+  Eigen::Isometry3d down = Eigen::Isometry3d::Identity();
+  down.translation() = Vector3d(0, 0, -1);
+  r = overlap_ratio(source, tree, down, 0.1);
+  EXPECT_EQ(r.num_inliers, 10u);
+  EXPECT_THROW(overlap_ratio(source, tree, down, 0.0), Error);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+class IcpSyntheticTest : public ::testing::TestWithParam<IcpMethod> {};
+
+TEST_P(IcpSyntheticTest, RecoversKnownTransformFromSeveralStarts) {
+  const PointCloud target = room_cloud(0.08, 7);
+  Rng rng(11);
+  IcpSettings s;
+  s.method = GetParam();
+  s.max_correspondence_distance = 1.0;
+  s.min_overlap = 0.9;
+  s.overlap_distance = 0.1;
+  s.max_iterations = 100;
+  const KdTree3f tree(target);
+  for (int trial = 0; trial < 6; ++trial) {
+    // The source is the same room sampled differently, moved by T_source_target.
+    const Eigen::Isometry3d T_target_source = random_pose(rng, 0.3, 0.12);
+    const PointCloud source = transformed(room_cloud(0.15, 100 + trial), T_target_source.inverse());
+    const IcpResult r = align_icp(source, target, tree, Eigen::Isometry3d::Identity(), s);
+    ASSERT_EQ(r.status, Status::kOk) << trial;
+    EXPECT_TRUE(r.converged);
+    const auto e = pose_error(r.T_target_source, T_target_source);
+    EXPECT_LT(e.first, 0.01) << trial;
+    EXPECT_LT(e.second, 0.2 * M_PI / 180) << trial;
+    EXPECT_GE(r.overlap, 0.9);
+    EXPECT_GT(r.num_inliers, source.size() / 2);
+    EXPECT_GT(r.degeneracy, 1e-3);
+    // Inverse direction: aligning target to source gives the inverse.
+    const KdTree3f stree(source);
+    IcpSettings si = s;
+    si.min_overlap = 0.5;  // the denser target has points between the sparse source's
+    const IcpResult ri = align_icp(target, source, stree, Eigen::Isometry3d::Identity(), si);
+    ASSERT_NE(ri.status, Status::kInsufficientData);
+    const auto ei = pose_error(ri.T_target_source.inverse(), T_target_source);
+    EXPECT_LT(ei.first, 0.02) << trial;
+    EXPECT_LT(ei.second, 0.3 * M_PI / 180) << trial;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Methods, IcpSyntheticTest,
+                         ::testing::Values(IcpMethod::kPointToPoint, IcpMethod::kPointToPlane));
+
+TEST(IcpTest, OverlapGateShrinksDistanceAndRejects) {
+  const PointCloud target = room_cloud(0.1, 3);
+  PointCloud source = room_cloud(0.2, 4);
+  // Add a clutter block that is not in the target: the overlap cannot reach 0.99.
+  Rng rng(5);
+  for (int i = 0; i < static_cast<int>(source.size() / 4); ++i)
+    source.points.emplace_back(rng.uniform(1.0, 2.0), rng.uniform(1.0, 2.0), rng.uniform(0.5, 1.5));
+  source.normals.clear();
+  IcpSettings s;
+  s.min_overlap = 0.99;
+  s.max_correspondence_distance = 0.5;
+  s.distance_step = 0.1;
+  s.min_correspondence_distance = 0.2;
+  const IcpResult r = align_icp(source, target, Eigen::Isometry3d::Identity(), s);
+  EXPECT_EQ(r.status, Status::kRejected);
+  EXPECT_EQ(r.rounds, 4);  // d = 0.5, 0.4, 0.3, 0.2
+  EXPECT_NEAR(r.final_correspondence_distance, 0.2, 1e-9);
+  EXPECT_LT(r.overlap, 0.99);
+  EXPECT_GT(r.overlap, 0.6);
+  s.min_overlap = 0.7;
+  const IcpResult ok = align_icp(source, target, Eigen::Isometry3d::Identity(), s);
+  EXPECT_EQ(ok.status, Status::kOk);
+  EXPECT_GE(ok.overlap, 0.7);
+  EXPECT_LT(ok.rounds, 4);
+}
+
+TEST(IcpTest, RobustKernelResistsOutliers) {
+  const PointCloud target = room_cloud(0.08, 21);
+  Rng rng(22);
+  const Eigen::Isometry3d T_target_source = random_pose(rng, 0.2, 0.05);
+  PointCloud source = transformed(room_cloud(0.15, 23), T_target_source.inverse());
+  // Gross outliers close to surfaces (inside the correspondence distance).
+  const std::size_t n = source.size();
+  for (std::size_t i = 0; i < n; i += 4) source.points[i] += Vector3f(0.25f, -0.25f, 0.2f);
+  source.normals.clear();
+  IcpSettings s;
+  s.max_correspondence_distance = 0.6;
+  s.min_overlap = 0.0;
+  s.max_iterations = 100;
+  s.kernel = RobustKernel::kTukey;
+  s.kernel_scale = 0.1;
+  const auto robust = pose_error(align_icp(source, target, Eigen::Isometry3d::Identity(), s).T_target_source, T_target_source);
+  s.kernel = RobustKernel::kNone;
+  const auto plain = pose_error(align_icp(source, target, Eigen::Isometry3d::Identity(), s).T_target_source, T_target_source);
+  EXPECT_LT(robust.first, 0.02);
+  EXPECT_LT(robust.first, plain.first);
+}
+
+TEST(IcpTest, DegeneracyIndicatorFlagsSinglePlane) {
+  PointCloud plane;
+  for (int i = 0; i < 40; ++i)
+    for (int j = 0; j < 40; ++j) plane.points.emplace_back(0.1f * i, 0.1f * j, 0.0f);
+  plane.normals.assign(plane.points.size(), Vector3f(0, 0, 1));
+  IcpSettings s;
+  s.method = IcpMethod::kPointToPlane;
+  s.min_overlap = 0.0;
+  s.degeneracy_threshold = 1e-4;
+  const IcpResult r = align_icp(plane, plane, Eigen::Isometry3d::Identity(), s);
+  EXPECT_LT(r.degeneracy, 1e-9);
+  EXPECT_EQ(r.status, Status::kDegenerate);
+  const PointCloud room = room_cloud(0.1, 1);
+  const IcpResult rr = align_icp(room, room, Eigen::Isometry3d::Identity(), s);
+  EXPECT_GT(rr.degeneracy, 1e-2);
+  EXPECT_EQ(rr.status, Status::kOk);
+}
+
+TEST(IcpTest, BadInput) {
+  const PointCloud room = room_cloud(0.2, 1);
+  const KdTree3f tree(room);
+  PointCloud empty;
+  EXPECT_EQ(align_icp(empty, room, tree, Eigen::Isometry3d::Identity()).status, Status::kInsufficientData);
+  PointCloud two;
+  two.points = {Vector3f(0, 0, 0), Vector3f(1, 0, 0)};
+  EXPECT_EQ(align_icp(two, room, tree, Eigen::Isometry3d::Identity()).status, Status::kInsufficientData);
+  EXPECT_EQ(align_icp(room, empty, Eigen::Isometry3d::Identity()).status, Status::kInsufficientData);
+  // Collinear source: Horn cannot fix the rotation about the line.
+  PointCloud line;
+  for (int i = 0; i < 50; ++i) line.points.emplace_back(0.1f * i, 0.0f, 0.0f);
+  const IcpResult rl = align_icp(line, line, Eigen::Isometry3d::Identity());
+  EXPECT_NE(rl.status, Status::kOk);
+  EXPECT_TRUE(rl.T_target_source.matrix().allFinite());
+  // NaN points are skipped.
+  PointCloud with_nan = room;
+  with_nan.points[3].x() = std::nanf("");
+  with_nan.normals.clear();
+  IcpSettings loose;
+  loose.min_overlap = 0.5;
+  EXPECT_EQ(align_icp(with_nan, room, tree, Eigen::Isometry3d::Identity(), loose).status, Status::kOk);
+  // Misuse throws.
+  PointCloud no_normals = room;
+  no_normals.normals.clear();
+  IcpSettings p2pl;
+  p2pl.method = IcpMethod::kPointToPlane;
+  EXPECT_THROW(align_icp(room, no_normals, Eigen::Isometry3d::Identity(), p2pl), Error);
+  const KdTree3f small_tree(two);
+  EXPECT_THROW(align_icp(room, room, small_tree, Eigen::Isometry3d::Identity()), Error);
+  Eigen::Isometry3d bad = Eigen::Isometry3d::Identity();
+  bad(0, 3) = std::nan("");
+  EXPECT_THROW(align_icp(room, room, tree, bad), Error);
+  IcpSettings neg;
+  neg.max_correspondence_distance = -1.0;
+  EXPECT_THROW(align_icp(room, room, tree, Eigen::Isometry3d::Identity(), neg), Error);
+  neg = IcpSettings{};
+  neg.min_overlap = 1.5;
+  EXPECT_THROW(align_icp(room, room, tree, Eigen::Isometry3d::Identity(), neg), Error);
+}
+
+TEST(IcpTest, Deterministic) {
+  const PointCloud target = room_cloud(0.1, 1);
+  Rng rng(9);
+  const PointCloud source = transformed(room_cloud(0.12, 2), random_pose(rng, 0.2, 0.1));
+  IcpSettings s;
+  s.method = IcpMethod::kPointToPlane;
+  s.kernel = RobustKernel::kHuber;
+  const IcpResult a = align_icp(source, target, Eigen::Isometry3d::Identity(), s);
+  const IcpResult b = align_icp(source, target, Eigen::Isometry3d::Identity(), s);
+  EXPECT_EQ(a.T_target_source.matrix(), b.T_target_source.matrix());
+  EXPECT_EQ(a.iterations, b.iterations);
+  EXPECT_EQ(a.rmse, b.rmse);
+}
+
+}  // namespace
+}  // namespace plumb
