@@ -32,6 +32,7 @@
 #include "plumb/io/pcd.hpp"
 #include "plumb/io/ply.hpp"
 #include "plumb/io/trajectory.hpp"
+#include "plumb/io/svg.hpp"
 #include "plumb/io/wheel_encoders.hpp"
 
 #include "plumb/eval/align.hpp"

@@ -1,0 +1,94 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "plumb/io/svg.hpp"
+
+#include <cmath>
+#include <regex>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "io_test_util.hpp"
+#include "test_data.hpp"
+
+namespace {
+
+using plumb::Vector2d;
+using plumb::io::render_svg;
+using plumb::io::SvgPlot;
+
+/// The numbers of the `points` attribute of the n-th polyline.
+std::vector<double> polyline_numbers(const std::string& svg, int n) {
+  std::size_t pos = 0;
+  for (int i = 0; i <= n; ++i) {
+    pos = svg.find("<polyline", pos);
+    if (pos == std::string::npos) return {};
+    if (i < n) ++pos;
+  }
+  const std::size_t a = svg.find("points=\"", pos) + 8, b = svg.find('"', a);
+  std::string s = svg.substr(a, b - a);
+  for (char& c : s)
+    if (c == ',') c = ' ';
+  std::istringstream in(s);
+  std::vector<double> v;
+  for (double x; in >> x;) v.push_back(x);
+  return v;
+}
+
+TEST(SvgTest, PathsAreScaledUniformlyWithYUp) {
+  SvgPlot plot;
+  plot.width_px = 1040;
+  plot.margin_px = 20;
+  plot.paths.push_back({"a", "red", 2.0, false, {{0, 0}, {10, 0}, {10, 5}}, {}});
+  const std::string svg = render_svg(plot);
+  const auto v = polyline_numbers(svg, 0);
+  ASSERT_EQ(v.size(), 6u);
+  // 10 m wide into 1000 px: 100 px per metre, origin at the margin, y flipped.
+  EXPECT_DOUBLE_EQ(v[0], 20.0);
+  EXPECT_DOUBLE_EQ(v[2], 1020.0);
+  EXPECT_DOUBLE_EQ(v[1], v[3]);
+  EXPECT_DOUBLE_EQ(v[1] - v[5], 500.0);  // 5 m up = 500 px towards the top
+  EXPECT_EQ(svg.rfind("</svg>\n"), svg.size() - 7);
+}
+
+TEST(SvgTest, TrajectoriesFloorPlanLegendAndEscaping) {
+  SvgPlot plot;
+  plot.title = "run <1> & \"2\"";
+  plot.floor_plan.push_back({Vector2d(-1, -1), Vector2d(4, -1)});
+  plumb::Trajectory t;
+  for (int i = 0; i < 5; ++i) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation() << i, 0.5 * i, 9.0;  // z is ignored
+    t.push_back(i, T);
+  }
+  plot.add_trajectory(t, "bim", "#2ca02c");
+  plot.add_trajectory(t, "", "black", true);
+  plot.paths[0].markers = {2, 99};  // out-of-range markers are skipped
+  const std::string svg = render_svg(plot);
+  EXPECT_NE(svg.find("run &lt;1&gt; &amp; &quot;2&quot;"), std::string::npos);
+  EXPECT_NE(svg.find(">bim</text>"), std::string::npos);
+  EXPECT_EQ(polyline_numbers(svg, 0).size(), 10u);
+  EXPECT_NE(svg.find("stroke-dasharray"), std::string::npos);
+  std::smatch m;
+  const std::regex circle("<circle");
+  EXPECT_EQ(std::distance(std::sregex_iterator(svg.begin(), svg.end(), circle), std::sregex_iterator()), 1);
+  EXPECT_NE(svg.find("<line x1"), std::string::npos);
+  const std::string path = plumb::test::temp_path("plot.svg");
+  plumb::io::write_svg(plot, path);
+  std::ifstream in(path);
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), svg);
+}
+
+TEST(SvgTest, EmptyPlotIsValidAndBadInputThrows) {
+  const std::string svg = render_svg(SvgPlot{});
+  EXPECT_EQ(svg.find("<svg"), 0u);
+  EXPECT_NE(svg.find("</svg>"), std::string::npos);
+  SvgPlot bad;
+  bad.paths.push_back({"x", "red", 1.0, false, {{0, NAN}}, {}});
+  plumb::test::expect_error([&] { render_svg(bad); }, {"non-finite", "x"});
+  SvgPlot narrow;
+  narrow.width_px = 10;
+  plumb::test::expect_error([&] { render_svg(narrow); }, {"width_px"});
+  plumb::test::expect_error([&] { plumb::io::write_svg(SvgPlot{}, "/nonexistent/dir/p.svg"); }, {"/nonexistent/dir/p.svg"});
+}
+
+}  // namespace
