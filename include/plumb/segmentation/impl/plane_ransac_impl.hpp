@@ -1,0 +1,284 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+// Bodies of plumb/segmentation/plane_ransac.hpp (included at its end).
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Eigenvalues>
+
+#include "plumb/core/error.hpp"
+#include "plumb/core/rng.hpp"
+
+namespace plumb {
+
+namespace detail {
+
+/// Candidate coordinates (and normals) gathered into contiguous float arrays, so the inlier count
+/// of a hypothesis is one vectorizable pass.
+struct PlaneCandidates {
+  std::vector<float> x, y, z, nx, ny, nz;
+  std::vector<std::size_t> index;  // into the caller's points
+  bool has_normals = false;
+};
+
+/// Number of candidates within `tau` of plane (a, b, c, d) whose normal agrees (|n_i . n| >= cos_max).
+/// Counts in blocks and gives up (returning a count <= `beat`) as soon as the remaining candidates
+/// can no longer lift the count above `beat`: most hypotheses are poor and stop early.
+inline std::size_t count_plane_inliers(const PlaneCandidates& c, float a, float b, float cc, float d, float tau,
+                                       float cos_max, std::size_t beat) {
+  const std::size_t n = c.x.size();
+  const float* x = c.x.data();
+  const float* y = c.y.data();
+  const float* z = c.z.data();
+  const float* nx = c.nx.data();
+  const float* ny = c.ny.data();
+  const float* nz = c.nz.data();
+  constexpr std::size_t kBlock = 512;
+  std::size_t count = 0;
+  for (std::size_t begin = 0; begin < n; begin += kBlock) {
+    const std::size_t end = std::min(n, begin + kBlock);
+    std::uint32_t block = 0;
+    if (c.has_normals) {
+      for (std::size_t i = begin; i < end; ++i) {
+        const float dist = std::abs(a * x[i] + b * y[i] + cc * z[i] - d);
+        const float agree = std::abs(a * nx[i] + b * ny[i] + cc * nz[i]);
+        block += static_cast<std::uint32_t>((dist < tau) & (agree >= cos_max));
+      }
+    } else {
+      for (std::size_t i = begin; i < end; ++i) {
+        const float dist = std::abs(a * x[i] + b * y[i] + cc * z[i] - d);
+        block += static_cast<std::uint32_t>(dist < tau);
+      }
+    }
+    count += block;
+    if (count + (n - end) <= beat) return count;
+  }
+  return count;
+}
+
+/// Whether a unit normal satisfies the axis constraint (axis unit, cos/sin of ε precomputed).
+inline bool plane_constraint_ok(const Vector3d& n, AxisConstraint constraint, const Vector3d& axis,
+                                double cos_eps, double sin_eps) {
+  switch (constraint) {
+    case AxisConstraint::kNone: return true;
+    case AxisConstraint::kPerpendicular: return std::abs(n.dot(axis)) >= cos_eps;
+    case AxisConstraint::kParallel: return std::abs(n.dot(axis)) <= sin_eps;
+  }
+  return true;
+}
+
+/// Orient a plane's normal toward the origin (D <= 0); through the origin: normal . axis >= 0.
+inline void orient_plane(Plane& p, const Vector3d& axis) {
+  const double tol = 1e-9;
+  if (p.offset > tol || (std::abs(p.offset) <= tol && p.normal.dot(axis) < 0.0)) {
+    p.normal = -p.normal;
+    p.offset = -p.offset;
+  }
+}
+
+}  // namespace detail
+
+inline bool fit_plane_least_squares(const std::vector<Vector3f>& points, const std::vector<std::size_t>& indices,
+                                    Plane& plane, double* rmse) {
+  const bool all = indices.empty();
+  const std::size_t m = all ? points.size() : indices.size();
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  std::size_t n = 0;
+  for (std::size_t j = 0; j < m; ++j) {
+    const std::size_t i = all ? j : indices[j];
+    PLUMB_CHECK(i < points.size(), "fit_plane_least_squares: index " << i << " out of range for "
+                                                                     << points.size() << " points");
+    if (!points[i].allFinite()) continue;
+    mean += points[i].cast<double>();
+    ++n;
+  }
+  if (n < 3) return false;
+  mean /= static_cast<double>(n);
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (std::size_t j = 0; j < m; ++j) {
+    const std::size_t i = all ? j : indices[j];
+    if (!points[i].allFinite()) continue;
+    const Eigen::Vector3d d = points[i].cast<double>() - mean;
+    cov.noalias() += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+  if (es.info() != Eigen::Success) return false;
+  const Eigen::Vector3d ev = es.eigenvalues();  // ascending
+  // Collinear (or coincident) points: the two smallest eigenvalues vanish relative to the largest.
+  if (!(ev(1) > 1e-12 * std::max(ev(2), 1e-300))) return false;
+  plane.normal = es.eigenvectors().col(0).normalized();
+  plane.offset = plane.normal.dot(mean);
+  if (rmse != nullptr) *rmse = std::sqrt(std::max(0.0, ev(0)) / static_cast<double>(n));
+  return plane.normal.allFinite();
+}
+
+inline PlaneRansacResult fit_plane_ransac(const std::vector<Vector3f>& points,
+                                          const std::vector<std::size_t>& candidates,
+                                          const std::vector<Vector3f>& normals,
+                                          const PlaneRansacSettings& settings) {
+  const PlaneRansacSettings& s = settings;
+  PLUMB_CHECK(std::isfinite(s.distance_threshold) && s.distance_threshold > 0.0,
+              "fit_plane_ransac: distance_threshold = " << s.distance_threshold << " must be finite and > 0");
+  PLUMB_CHECK(s.max_iterations >= 1, "fit_plane_ransac: max_iterations = " << s.max_iterations << " must be >= 1");
+  PLUMB_CHECK(s.confidence >= 0.0 && s.confidence <= 1.0,
+              "fit_plane_ransac: confidence = " << s.confidence << " must be in [0, 1]");
+  PLUMB_CHECK(s.axis.allFinite() && s.axis.norm() > 0.0, "fit_plane_ransac: settings.axis must be non-zero");
+  PLUMB_CHECK(std::isfinite(s.max_axis_angle) && s.max_axis_angle >= 0.0,
+              "fit_plane_ransac: max_axis_angle = " << s.max_axis_angle << " must be finite and >= 0");
+  PLUMB_CHECK(!std::isnan(s.max_normal_angle), "fit_plane_ransac: max_normal_angle is NaN");
+  PLUMB_CHECK(s.min_inliers >= 3, "fit_plane_ransac: min_inliers = " << s.min_inliers << " must be >= 3");
+  PLUMB_CHECK(normals.empty() || normals.size() == points.size(),
+              "fit_plane_ransac: " << normals.size() << " normals for " << points.size() << " points");
+  const bool point_normal = s.sampling == PlaneSampling::kPointNormal;
+  PLUMB_CHECK(!point_normal || !normals.empty(), "fit_plane_ransac: kPointNormal sampling needs normals");
+
+  PlaneRansacResult out;
+  const Vector3d axis = s.axis.normalized();
+  const double cos_eps = std::cos(std::min(s.max_axis_angle, 1.5707963267948966));
+  const double sin_eps = std::sin(std::min(s.max_axis_angle, 1.5707963267948966));
+  const float cos_normal = s.max_normal_angle >= 1.5707963267948966
+                               ? -1.0f
+                               : static_cast<float>(std::cos(std::max(0.0, s.max_normal_angle)));
+  const float tau = static_cast<float>(s.distance_threshold);
+
+  // Gather the finite candidates.
+  detail::PlaneCandidates c;
+  c.has_normals = !normals.empty() && cos_normal > -1.0f;
+  std::vector<Vector3f> sample_normals;  // kPointNormal: the candidates' normals
+  const std::size_t m = candidates.empty() ? points.size() : candidates.size();
+  c.x.reserve(m);
+  c.y.reserve(m);
+  c.z.reserve(m);
+  c.index.reserve(m);
+  if (point_normal) sample_normals.reserve(m);
+  for (std::size_t j = 0; j < m; ++j) {
+    const std::size_t i = candidates.empty() ? j : candidates[j];
+    PLUMB_CHECK(i < points.size(), "fit_plane_ransac: candidate index " << i << " out of range for "
+                                                                        << points.size() << " points");
+    const Vector3f& p = points[i];
+    if (!p.allFinite()) continue;
+    c.x.push_back(p.x());
+    c.y.push_back(p.y());
+    c.z.push_back(p.z());
+    c.index.push_back(i);
+    if (point_normal) sample_normals.push_back(normals[i]);
+    if (c.has_normals) {
+      const Vector3f& nn = normals[i];
+      const bool ok = nn.allFinite();
+      c.nx.push_back(ok ? nn.x() : 0.0f);
+      c.ny.push_back(ok ? nn.y() : 0.0f);
+      c.nz.push_back(ok ? nn.z() : 0.0f);  // a zero normal never agrees (cos_normal > -1 ... see below)
+    }
+  }
+  const std::size_t n = c.index.size();
+  out.num_candidates = n;
+  if (n < 3 || n < s.min_inliers) return out;  // kInsufficientData
+  // A zero normal gives agreement 0, which passes only when cos_normal <= 0, i.e. never here.
+
+  Rng rng(s.seed);
+  std::size_t best_count = 0;
+  Plane best;
+  bool have_best = false;
+  double needed = static_cast<double>(s.max_iterations);
+  const double log_fail = std::log(std::max(1e-300, 1.0 - s.confidence));
+  int it = 0;
+  while (it < s.max_iterations && static_cast<double>(it) < needed) {
+    ++it;
+    Vector3d nrm;
+    Vector3d p0;
+    if (point_normal) {
+      const std::size_t i0 = static_cast<std::size_t>(rng.uniform_index(n));
+      const Vector3f& nf = sample_normals[i0];
+      if (!nf.allFinite() || !(nf.squaredNorm() > 0.0f)) continue;
+      nrm = nf.cast<double>().normalized();
+      p0 = Vector3d(c.x[i0], c.y[i0], c.z[i0]);
+    } else {
+    const std::size_t i0 = static_cast<std::size_t>(rng.uniform_index(n));
+    std::size_t i1 = static_cast<std::size_t>(rng.uniform_index(n - 1));
+    if (i1 >= i0) ++i1;
+    std::size_t i2 = static_cast<std::size_t>(rng.uniform_index(n - 2));
+    // map i2 into [0, n) \ {i0, i1}
+    const std::size_t lo = std::min(i0, i1), hi = std::max(i0, i1);
+    if (i2 >= lo) ++i2;
+    if (i2 >= hi) ++i2;
+    p0 = Vector3d(c.x[i0], c.y[i0], c.z[i0]);
+    const Vector3d p1(c.x[i1], c.y[i1], c.z[i1]);
+    const Vector3d p2(c.x[i2], c.y[i2], c.z[i2]);
+    const Vector3d e1 = p1 - p0, e2 = p2 - p0;
+    nrm = e1.cross(e2);
+    const double len = nrm.norm();
+    if (!(len > 1e-12 * std::max(1e-300, e1.squaredNorm() + e2.squaredNorm()))) continue;  // collinear
+    nrm /= len;
+    }
+    if (!detail::plane_constraint_ok(nrm, s.constraint, axis, cos_eps, sin_eps)) continue;
+    const double d = nrm.dot(p0);
+    const std::size_t count =
+        detail::count_plane_inliers(c, static_cast<float>(nrm.x()), static_cast<float>(nrm.y()),
+                                    static_cast<float>(nrm.z()), static_cast<float>(d), tau, cos_normal,
+                                    have_best ? best_count : 0);
+    if (!have_best || count > best_count) {
+      have_best = true;
+      best_count = count;
+      best.normal = nrm;
+      best.offset = d;
+      const double w = static_cast<double>(count) / static_cast<double>(n);
+      const double w3 = point_normal ? w : w * w * w;
+      if (s.confidence < 1.0) {
+        if (w3 >= 1.0) {
+          needed = 0.0;
+        } else if (w3 > 0.0) {
+          needed = std::min(needed, log_fail / std::log1p(-w3));
+        }
+      }
+    }
+  }
+  out.iterations = it;
+  out.converged = needed < static_cast<double>(s.max_iterations) && static_cast<double>(it) >= needed;
+  if (!have_best) {
+    out.status = Status::kDegenerate;
+    return out;
+  }
+
+  auto collect = [&](const Plane& pl, std::vector<std::size_t>& inl) {
+    inl.clear();
+    const float a = static_cast<float>(pl.normal.x()), b = static_cast<float>(pl.normal.y()),
+                cc = static_cast<float>(pl.normal.z()), d = static_cast<float>(pl.offset);
+    for (std::size_t j = 0; j < n; ++j) {
+      const float dist = std::abs(a * c.x[j] + b * c.y[j] + cc * c.z[j] - d);
+      bool ok = dist < tau;
+      if (ok && c.has_normals) ok = std::abs(a * c.nx[j] + b * c.ny[j] + cc * c.nz[j]) >= cos_normal;
+      if (ok) inl.push_back(c.index[j]);
+    }
+  };
+  std::vector<std::size_t> inliers;
+  collect(best, inliers);
+  if (s.refine && inliers.size() >= 3) {
+    Plane refit;
+    if (fit_plane_least_squares(points, inliers, refit) &&
+        detail::plane_constraint_ok(refit.normal, s.constraint, axis, cos_eps, sin_eps)) {
+      std::vector<std::size_t> refit_inliers;
+      collect(refit, refit_inliers);
+      if (refit_inliers.size() >= inliers.size()) {
+        best = refit;
+        inliers = std::move(refit_inliers);
+      }
+    }
+  }
+  std::sort(inliers.begin(), inliers.end());
+  detail::orient_plane(best, axis);
+  double sum_sq = 0.0;
+  for (std::size_t i : inliers) {
+    const double dist = best.signed_distance(points[i]);
+    sum_sq += dist * dist;
+  }
+  out.rmse = inliers.empty() ? 0.0 : std::sqrt(sum_sq / static_cast<double>(inliers.size()));
+  out.plane = best;
+  out.inliers = std::move(inliers);
+  out.status = out.inliers.size() >= s.min_inliers ? Status::kOk : Status::kInsufficientData;
+  return out;
+}
+
+}  // namespace plumb
