@@ -1,17 +1,16 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
 
-#include "plumb/core/rng.hpp"
 #include "plumb/features/fpfh.hpp"
-#include "plumb/features/normals.hpp"
-#include "plumb/filters/voxel_grid.hpp"
 #include "plumb/io/pcd.hpp"
 #include "test_data.hpp"
 
@@ -34,7 +33,8 @@ struct BunnyGolden {
 };
 
 BunnyGolden read_golden() {
-  const std::string path = std::string(PLUMB_SOURCE_DIR) + "/tests/features/golden/bunny_open3d_fpfh.txt";
+  const std::string path =
+      std::string(PLUMB_SOURCE_DIR) + "/tests/features/golden/bunny_open3d_fpfh.txt";
   std::ifstream in(path);
   if (!in) throw std::runtime_error("cannot open " + path);
   BunnyGolden g;
@@ -111,6 +111,158 @@ TEST(FpfhTest, MatchesOpen3dOnBunny) {
     }
     EXPECT_EQ(num_bad, 0u) << c.name << ": worst difference " << worst;
   }
+}
+
+PointCloud bunny_with_golden_normals() {
+  PointCloud cloud = io::read_pcd(test::data_path("cloud3d/pcl_test/bunny.pcd"));
+  cloud.normals = read_golden().normals;
+  return cloud;
+}
+
+TEST(FpfhTest, HandComputedPair) {
+  // p1 = 0 with normal +z, p2 = (1, 0, 0) with normal tilted 60 degrees toward +x. n2 makes the
+  // smaller angle with the line, so p2 is the source: u = n2, d = p1 - p2 = -x, theta = u.d = -sin 60
+  // (bin floor(11 (1 - 0.866) / 2) = 0); v = unit(d x u) = +y, phi = v.n1 = 0 (bin 5);
+  // w = u x v = (-cos 60, 0, sin 60), alpha = atan2(w.n1, u.n1) = 60 deg (bin floor(11 * 4/6) = 7).
+  PointCloud cloud;
+  const float t = static_cast<float>(M_PI / 3.0);
+  cloud.points = {Vector3f(0, 0, 0), Vector3f(1, 0, 0)};
+  cloud.normals = {Vector3f(0, 0, 1), Vector3f(std::sin(t), 0, std::cos(t))};
+  FpfhSettings s;
+  s.radius = 1.5f;
+  const FpfhResult r = compute_fpfh(cloud, s);
+  ASSERT_EQ(r.features.size(), 2u);
+  EXPECT_EQ(r.num_invalid, 0u);
+  EXPECT_EQ(r.indices, (std::vector<std::size_t>{0, 1}));
+  for (const auto& f : r.features) {
+    for (int j = 0; j < kFpfhBins; ++j) {
+      // SPFH(p) = 100 in each feature's bin; the weighted neighbour part, renormalised, adds 100
+      const bool hit = j == 7 || j == 11 + 5 || j == 22 + 0;
+      EXPECT_FLOAT_EQ(f[j], hit ? 200.0f : 0.0f) << "bin " << j;
+    }
+  }
+}
+
+TEST(FpfhTest, RotationInvariantOnRealCloud) {
+  PLUMB_REQUIRE_DATA(path, "cloud3d/pcl_test/bunny.pcd");
+  const PointCloud cloud = bunny_with_golden_normals();
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() =
+      Eigen::AngleAxisd(2.1, Eigen::Vector3d(0.3, -0.8, 0.5).normalized()).toRotationMatrix();
+  T.translation() = Eigen::Vector3d(3.0, -1.0, 0.5);
+  const PointCloud moved = transformed(cloud, T);
+  FpfhSettings s;
+  s.radius = 0.03f;
+  s.max_neighbors = 0;
+  const FpfhResult a = compute_fpfh(cloud, s);
+  const FpfhResult b = compute_fpfh(moved, s);
+  ASSERT_EQ(a.features.size(), b.features.size());
+  // Float rounding of the moved coordinates may move a pair feature lying on a bin edge into the
+  // next bin (a few points at most); every other signature must be equal to rounding.
+  std::size_t num_changed = 0;
+  for (std::size_t i = 0; i < a.features.size(); ++i) {
+    float l1 = 0.0f;
+    for (int j = 0; j < kFpfhBins; ++j) l1 += std::fabs(a.features[i][j] - b.features[i][j]);
+    if (l1 > 1e-2f) ++num_changed;
+  }
+  EXPECT_LE(num_changed, a.features.size() / 50) << "of " << a.features.size();
+}
+
+TEST(FpfhTest, KeyPointSubsetMatchesFullRun) {
+  PLUMB_REQUIRE_DATA(path, "cloud3d/pcl_test/bunny.pcd");
+  const PointCloud cloud = bunny_with_golden_normals();
+  FpfhSettings s;
+  s.radius = 0.025f;
+  s.max_neighbors = 20;  // capped: the key points' neighbours keep their own capped lists
+  const FpfhResult full = compute_fpfh(cloud, s);
+  std::vector<std::size_t> keys;
+  for (std::size_t i = cloud.size(); i-- > 0;) {
+    if (i % 7 == 3) keys.push_back(i);  // descending order
+  }
+  keys.push_back(keys.front());  // a repeat
+  const FpfhResult sub = compute_fpfh(cloud, s, &keys);
+  ASSERT_EQ(sub.features.size(), keys.size());
+  EXPECT_EQ(sub.indices, keys);
+  for (std::size_t k = 0; k < keys.size(); ++k) {
+    EXPECT_EQ(sub.features[k], full.features[keys[k]]) << "key " << keys[k];
+  }
+  const std::vector<std::size_t> none;
+  EXPECT_TRUE(compute_fpfh(cloud, s, &none).features.empty());
+}
+
+TEST(FpfhTest, IsolatedAndInvalidPointsGetZeroSignature) {
+  PointCloud cloud;
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (int i = 0; i < 200; ++i) {
+    cloud.points.emplace_back(u(rng), u(rng), 0.05f * u(rng));
+    cloud.normals.push_back(Vector3f(0.1f * u(rng), 0.1f * u(rng), 1.0f).normalized());
+  }
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  cloud.points.emplace_back(50.0f, 50.0f, 50.0f);  // 200: isolated
+  cloud.normals.emplace_back(0.0f, 0.0f, 1.0f);
+  cloud.points.emplace_back(0.5f, 0.5f, 0.0f);  // 201: NaN normal
+  cloud.normals.emplace_back(nan, nan, nan);
+  cloud.points.emplace_back(nan, 0.5f, 0.0f);  // 202: NaN point
+  cloud.normals.emplace_back(0.0f, 0.0f, 1.0f);
+  FpfhSettings s;
+  s.radius = 0.2f;
+  const FpfhResult r = compute_fpfh(cloud, s);
+  EXPECT_EQ(r.num_invalid, 3u);
+  const FpfhSignature zero{};
+  for (std::size_t i = 200; i < 203; ++i) EXPECT_EQ(r.features[i], zero) << i;
+  for (std::size_t i = 0; i < 200; ++i) {
+    EXPECT_NE(r.features[i], zero) << i;
+    expect_sub_sums(r.features[i], 200.0f, "point " + std::to_string(i));
+  }
+  // the invalid points are not neighbours of anyone: same signatures without them
+  PointCloud clean = cloud;
+  clean.points.resize(200);
+  clean.normals.resize(200);
+  const FpfhResult c = compute_fpfh(clean, s);
+  for (std::size_t i = 0; i < 200; ++i) {
+    // equal up to the summation order of the weighted neighbour part (the kd-trees differ)
+    for (int j = 0; j < kFpfhBins; ++j) EXPECT_NEAR(r.features[i][j], c.features[i][j], 1e-4f) << i;
+  }
+  // a cap of 1 leaves only the point itself: nothing is describable
+  s.max_neighbors = 1;
+  EXPECT_EQ(compute_fpfh(cloud, s).num_invalid, cloud.size());
+}
+
+TEST(FpfhTest, BadInputThrows) {
+  PointCloud cloud;
+  EXPECT_THROW(compute_fpfh(cloud), Error);  // empty
+  cloud.points = {Vector3f(0, 0, 0), Vector3f(0.1f, 0, 0), Vector3f(0, 0.1f, 0)};
+  EXPECT_THROW(compute_fpfh(cloud), Error);  // no normals
+  cloud.normals = {Vector3f(0, 0, 1), Vector3f(0, 0, 1)};
+  EXPECT_THROW(compute_fpfh(cloud), Error);  // wrong number of normals
+  cloud.normals.push_back(Vector3f(0, 0, 1));
+  EXPECT_NO_THROW(compute_fpfh(cloud));
+  for (const float radius : {0.0f, -1.0f, std::numeric_limits<float>::quiet_NaN(),
+                             std::numeric_limits<float>::infinity()}) {
+    FpfhSettings s;
+    s.radius = radius;
+    EXPECT_THROW(compute_fpfh(cloud, s), Error) << radius;
+  }
+  const std::vector<std::size_t> out_of_range = {0, 3};
+  EXPECT_THROW(compute_fpfh(cloud, {}, &out_of_range), Error);
+  // every point NaN: nothing describable, no crash
+  PointCloud all_nan;
+  all_nan.points.assign(4, Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
+  all_nan.normals.assign(4, Vector3f::UnitZ());
+  EXPECT_EQ(compute_fpfh(all_nan).num_invalid, 4u);
+}
+
+TEST(FpfhTest, Deterministic) {
+  PLUMB_REQUIRE_DATA(path, "cloud3d/pcl_test/bunny.pcd");
+  const PointCloud cloud = bunny_with_golden_normals();
+  FpfhSettings s;
+  s.radius = 0.03f;
+  s.max_neighbors = 25;
+  const FpfhResult a = compute_fpfh(cloud, s);
+  const FpfhResult b = compute_fpfh(cloud, s);
+  EXPECT_EQ(a.features, b.features);  // bit-identical
+  EXPECT_EQ(a.num_invalid, b.num_invalid);
 }
 
 }  // namespace

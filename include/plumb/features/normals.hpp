@@ -31,13 +31,19 @@ struct NormalSettings {
 struct NormalResult {
   std::vector<Vector3f> normals;  ///< unit normal per input point; NaN where not estimable
   std::vector<float> curvature;   ///< λ0 / (λ0 + λ1 + λ2) per point (PCL's surface variation); NaN likewise
-  std::size_t num_invalid = 0;    ///< points with NaN normal (non-finite, < 3 neighbours, coincident)
+  std::size_t num_invalid = 0;    ///< NaN normals (non-finite, < 3 neighbours, coincident, collinear)
 };
 
 /// @brief Normal of every point of `cloud`, by PCA of its neighbours in `tree`.
 /// @param cloud query points (any size; non-finite points get NaN normals)
 /// @param tree  kd-tree over the cloud whose neighbours are used (usually built on `cloud`)
 /// @param tree_points the points `tree` was built from (indices returned by `tree` refer to them)
+/// @note Per point: the neighbourhood's covariance (double, one pass about a neighbour) and its
+///       smallest eigenvector by a closed-form 3x3 solver; no allocation per point. A neighbourhood
+///       of < 3 points, or of coincident or collinear points, has no unique normal: NaN. The
+///       hybrid search returns the k nearest points within `radius` (ties broken arbitrarily),
+///       by a radius search while balls are small and by a k-nearest search where they are dense.
+///       Deterministic; single thread; O(n (k + log n)).
 NormalResult estimate_normals(const std::vector<Vector3f>& cloud, const KdTree<3>& tree,
                               const std::vector<Vector3f>& tree_points,
                               const NormalSettings& settings = {});

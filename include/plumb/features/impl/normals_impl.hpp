@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
+#include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include <Eigen/Eigenvalues>
 
@@ -11,27 +13,70 @@ namespace plumb {
 
 namespace detail {
 
+/// Covariance of the neighbours `idx[0..n)` about their mean, accumulated in double about the
+/// first neighbour (a point of the neighbourhood, so the one-pass sums do not cancel).
+inline Eigen::Matrix3d neighbourhood_covariance(const std::vector<Vector3f>& pts,
+                                                const std::size_t* idx, std::size_t n) {
+  const Eigen::Vector3d origin = pts[idx[0]].cast<double>();
+  double sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, sxz = 0, syy = 0, syz = 0, szz = 0;
+  for (std::size_t j = 0; j < n; ++j) {
+    const Vector3f& p = pts[idx[j]];
+    const double x = static_cast<double>(p.x()) - origin.x();
+    const double y = static_cast<double>(p.y()) - origin.y();
+    const double z = static_cast<double>(p.z()) - origin.z();
+    sx += x;
+    sy += y;
+    sz += z;
+    sxx += x * x;
+    sxy += x * y;
+    sxz += x * z;
+    syy += y * y;
+    syz += y * z;
+    szz += z * z;
+  }
+  const double inv = 1.0 / static_cast<double>(n);
+  const double mx = sx * inv, my = sy * inv, mz = sz * inv;
+  Eigen::Matrix3d cov;
+  cov(0, 0) = sxx * inv - mx * mx;
+  cov(0, 1) = sxy * inv - mx * my;
+  cov(0, 2) = sxz * inv - mx * mz;
+  cov(1, 1) = syy * inv - my * my;
+  cov(1, 2) = syz * inv - my * mz;
+  cov(2, 2) = szz * inv - mz * mz;
+  cov(1, 0) = cov(0, 1);
+  cov(2, 0) = cov(0, 2);
+  cov(2, 1) = cov(1, 2);
+  return cov;
+}
+
+/// Normal of a neighbourhood from its covariance: the eigenvector of the smallest eigenvalue, by
+/// Eigen's closed-form 3x3 solver (trigonometric eigenvalues, eigenvectors from cross products of
+/// the shifted rows, most separated eigenvalue first). Returns false when the neighbourhood is
+/// degenerate: all points coincide, or they are collinear (two eigenvalues ~0: no unique normal).
+inline bool normal_from_covariance(const Eigen::Matrix3d& cov, Vector3f& normal, float& curvature) {
+  const double trace = cov.trace();
+  if (!(trace > 0.0) || !std::isfinite(trace)) return false;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
+  es.computeDirect(cov);
+  const Eigen::Vector3d ev = es.eigenvalues();  // ascending
+  // Collinear (or a single point repeated): the middle eigenvalue vanishes next to the largest.
+  // The closed form resolves a pair of small eigenvalues to ~sqrt(eps) * largest (~1e-8), so the
+  // test sits above that: a neighbourhood thinner than ~3e-4 of its length counts as a line.
+  if (!(ev(1) > 1e-7 * ev(2))) return false;
+  const Eigen::Vector3d v = es.eigenvectors().col(0);
+  const double len = v.norm();
+  if (!(len > 0.5)) return false;  // closed form failed (should not happen on a valid matrix)
+  normal = (v / len).cast<float>();
+  curvature = static_cast<float>(std::max(0.0, ev(0)) / trace);
+  return normal.allFinite();
+}
+
 /// PCA of the neighbours `idx[0..n)`: unit normal (smallest eigenvector) and surface variation.
-/// Returns false when the neighbourhood is degenerate (< 3 points or all coincident).
+/// Returns false when the neighbourhood is degenerate (< 3 points, coincident or collinear).
 inline bool pca_normal(const std::vector<Vector3f>& pts, const std::size_t* idx, std::size_t n,
                        Vector3f& normal, float& curvature) {
   if (n < 3) return false;
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (std::size_t j = 0; j < n; ++j) mean += pts[idx[j]].cast<double>();
-  mean /= static_cast<double>(n);
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (std::size_t j = 0; j < n; ++j) {
-    const Eigen::Vector3d d = pts[idx[j]].cast<double>() - mean;
-    cov.noalias() += d * d.transpose();
-  }
-  const double trace = cov.trace();
-  if (!(trace > 0.0)) return false;
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
-  if (es.info() != Eigen::Success) return false;
-  const Eigen::Vector3d ev = es.eigenvalues();  // ascending
-  normal = es.eigenvectors().col(0).cast<float>().normalized();
-  curvature = static_cast<float>(std::max(0.0, ev(0)) / trace);
-  return normal.allFinite();
+  return normal_from_covariance(neighbourhood_covariance(pts, idx, n), normal, curvature);
 }
 
 }  // namespace detail
@@ -40,8 +85,9 @@ inline NormalResult estimate_normals(const std::vector<Vector3f>& cloud, const K
                                      const std::vector<Vector3f>& tree_points,
                                      const NormalSettings& settings) {
   PLUMB_CHECK(settings.k >= 3, "estimate_normals: settings.k = " << settings.k << " must be >= 3");
-  PLUMB_CHECK(!(settings.radius < 0.0f) && !std::isnan(settings.radius),
-              "estimate_normals: settings.radius = " << settings.radius << " must be >= 0");
+  PLUMB_CHECK(!(settings.radius < 0.0f) && std::isfinite(settings.radius),
+              "estimate_normals: settings.radius = " << settings.radius
+                                                     << " must be >= 0 and finite");
   PLUMB_CHECK(tree.num_input_points() == tree_points.size(),
               "estimate_normals: tree was built from " << tree.num_input_points()
                                                        << " points but tree_points has "
@@ -50,14 +96,49 @@ inline NormalResult estimate_normals(const std::vector<Vector3f>& cloud, const K
   NormalResult out;
   out.normals.assign(cloud.size(), Vector3f::Constant(nan));
   out.curvature.assign(cloud.size(), nan);
-  std::vector<std::size_t> idx(settings.k);
-  std::vector<float> d2(settings.k);
+  const std::size_t k = settings.k;
   const float r2 = settings.radius * settings.radius;
+  const bool hybrid = settings.radius > 0.0f;
+  // Buffers reused for every point (no allocation once they have grown).
+  std::vector<std::size_t> idx(k);
+  std::vector<float> d2(k);
+  std::vector<std::pair<float, std::size_t>> cand;
+  // Hybrid search strategy: a radius search costs in proportion to the points inside the ball, a
+  // k-nearest search in proportion to k. Use the radius search while the balls hold few points
+  // (at most 4k, judged from the previous point: neighbouring points have similar density), else
+  // k nearest then trimmed to the radius. Both give the same neighbours (the k nearest in radius).
+  bool use_radius = hybrid;
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const Vector3f& p = cloud[i];
-    std::size_t n = p.allFinite() ? tree.knn(p, settings.k, idx.data(), d2.data()) : 0;
-    if (settings.radius > 0.0f) {
-      while (n > 0 && d2[n - 1] > r2) --n;  // sorted ascending
+    if (!p.allFinite()) {
+      ++out.num_invalid;
+      continue;
+    }
+    std::size_t n = 0;
+    if (use_radius) {
+      const std::size_t m = tree.radius(p, settings.radius, idx, d2, /*sorted=*/false);
+      use_radius = m <= 4 * k;
+      if (m > k) {
+        cand.resize(m);
+        for (std::size_t j = 0; j < m; ++j) cand[j] = {d2[j], idx[j]};
+        std::nth_element(cand.begin(), cand.begin() + static_cast<std::ptrdiff_t>(k - 1),
+                         cand.end());
+        for (std::size_t j = 0; j < k; ++j) idx[j] = cand[j].second;
+        n = k;
+      } else {
+        n = m;
+      }
+    } else {
+      if (idx.size() < k) {
+        idx.resize(k);
+        d2.resize(k);
+      }
+      n = tree.knn(p, k, idx.data(), d2.data());
+      if (hybrid) {
+        // sorted ascending; how many of the k nearest lie inside the ball tells the density
+        while (n > 0 && d2[n - 1] > r2) --n;
+        use_radius = n < k;
+      }
     }
     Vector3f normal;
     float curv = nan;
@@ -74,6 +155,9 @@ inline NormalResult estimate_normals(const std::vector<Vector3f>& cloud, const K
 
 inline std::size_t compute_normals(PointCloud& cloud, const NormalSettings& settings) {
   PLUMB_CHECK(!cloud.empty(), "compute_normals: the cloud is empty");
+  std::size_t num_finite = 0;
+  for (const auto& p : cloud.points) num_finite += p.allFinite() ? 1 : 0;
+  PLUMB_CHECK(num_finite > 0, "compute_normals: the cloud has no finite point");
   const KdTree<3> tree(cloud.points);
   NormalResult r = estimate_normals(cloud.points, tree, cloud.points, settings);
   cloud.normals = std::move(r.normals);
