@@ -1,0 +1,162 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+/// @file
+/// @brief Frame dump directories: the exchange format between the simulator, `plumb run` / `lio`
+///        and users' own recorded data (LiDAR frames, wheel encoders, wheel odometry, IMU, ground
+///        truth). Layout (every file but meta.json and frames.csv optional):
+///
+/// ```
+/// DIR/meta.json        sensor model, extrinsics T_base_lidar / T_base_imu (4x4 row-major),
+///                      nominal wheel_radius_left / wheel_radius_right / axle, units
+/// DIR/frames.csv       index,stamp,file        (file relative to DIR, e.g. frames/000000.pcd)
+/// DIR/frames/NNNNNN.pcd  LiDAR frame: x y z intensity ring time label; time [s] since the stamp
+/// DIR/wheels.csv       stamp,left,right        cumulative wheel angles [rad] (io/wheel_encoders.hpp)
+/// DIR/odom.csv         stamp,x,y,theta         wheel odometry integrated with the nominal parameters
+/// DIR/imu.csv          stamp,wx,wy,wz,ax,ay,az angular rate [rad/s], specific force [m/s^2], IMU frame
+/// DIR/gt.tum           true T_world_base at the frame stamps (TUM)
+/// DIR/gt_dense.tum     true T_world_base, dense (TUM)
+/// ```
+/// CSV files start with exactly that header line; `#` lines and blank lines are skipped; fields
+/// are separated by commas. Stamps are in seconds and must increase strictly within a file.
+
+#include <cstddef>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "plumb/core/point_cloud.hpp"
+#include "plumb/core/pose2.hpp"
+#include "plumb/core/trajectory.hpp"
+#include "plumb/calibration/tuple_extraction.hpp"
+#include "plumb/io/pcd.hpp"
+
+namespace plumb::io {
+
+/// @brief One wheel-odometry pose (the base in the odometry frame).
+struct OdomSample {
+  double stamp = 0.0;  ///< [s]
+  Pose2 pose;          ///< x y [m], theta [rad]
+};
+
+/// @brief One IMU reading in the IMU frame.
+struct ImuSample {
+  double stamp = 0.0;                     ///< [s]
+  Vector3d w_imu = Vector3d::Zero();      ///< angular rate [rad/s]
+  Vector3d f_imu = Vector3d::Zero();      ///< specific force (acceleration minus gravity) [m/s^2]
+};
+
+/// @brief The LiDAR as described in meta.json (informative; frames carry their own points).
+struct DumpLidar {
+  std::string name;                    ///< e.g. "rfans32"; empty when unknown
+  double rate_hz = 0.0;                ///< revolutions per second, 0 when unknown
+  int columns = 0;                     ///< firings per revolution and line, 0 when unknown
+  std::vector<double> elevations_rad;  ///< one per ring [rad], may be empty
+  double min_range = 0.0;              ///< [m]
+  double max_range = 0.0;              ///< [m], 0 when unknown
+};
+
+/// @brief Contents of meta.json.
+struct FrameDumpMeta {
+  DumpLidar lidar;
+  Eigen::Isometry3d T_base_lidar = Eigen::Isometry3d::Identity();  ///< lidar points into the base frame
+  Eigen::Isometry3d T_base_imu = Eigen::Isometry3d::Identity();    ///< IMU frame into the base frame
+  double wheel_radius_left = 0.0;   ///< nominal [m]; 0 when the dump has no wheels
+  double wheel_radius_right = 0.0;  ///< nominal [m]; 0 when the dump has no wheels
+  double axle = 0.0;                ///< nominal wheel separation [m]; 0 when the dump has no wheels
+  double imu_rate_hz = 0.0;         ///< 0 when unknown or no IMU
+  Vector3d origin_offset = Vector3d::Zero();  ///< BIM/IFC world = dump world + offset [m]
+  std::string source;    ///< free text: what produced the dump (e.g. "plumb simulate")
+  std::string model;     ///< free text: the building model, when known
+  std::string scenario;  ///< free text: e.g. "indoor"
+};
+
+/// @brief Settings of FrameDumpWriter.
+struct FrameDumpWriteSettings {
+  PcdEncoding encoding = PcdEncoding::kBinary;  ///< PCD DATA kind of the frames
+  bool overwrite = false;  ///< allow writing into a directory that already holds meta.json
+};
+
+/// @brief Writes a frame dump directory incrementally (frames are streamed, not held in memory).
+///
+/// Usage: construct (writes meta.json, creates DIR/frames), add_frame() per LiDAR frame, the
+/// write_*() functions once each, then close() (also called by the destructor, which swallows errors).
+/// @note Not thread safe; one writer per directory.
+class FrameDumpWriter {
+ public:
+  /// @throws plumb::Error if the directory cannot be created or written, or already holds a dump
+  ///         and `settings.overwrite` is false.
+  FrameDumpWriter(const std::string& dir, const FrameDumpMeta& meta, const FrameDumpWriteSettings& settings = {});
+  ~FrameDumpWriter();
+  FrameDumpWriter(const FrameDumpWriter&) = delete;
+  FrameDumpWriter& operator=(const FrameDumpWriter&) = delete;
+
+  /// @brief Write frames/NNNNNN.pcd and its frames.csv line.
+  /// @throws plumb::Error if the stamp does not increase or the cloud is inconsistent.
+  void add_frame(double stamp, const PointCloud& cloud_lidar);
+  void write_wheels(const std::vector<WheelEncoderReading>& wheels);      ///< wheels.csv
+  void write_odometry(const std::vector<OdomSample>& odometry);   ///< odom.csv
+  void write_imu(const std::vector<ImuSample>& imu);              ///< imu.csv
+  void write_ground_truth(const Trajectory& T_world_base);        ///< gt.tum
+  void write_ground_truth_dense(const Trajectory& T_world_base);  ///< gt_dense.tum
+  /// @brief Flush and close frames.csv. @throws plumb::Error on a write error.
+  void close();
+
+  std::size_t num_frames() const { return num_frames_; }
+  const std::string& dir() const { return dir_; }
+
+ private:
+  std::string dir_;
+  FrameDumpWriteSettings settings_;
+  std::FILE* frames_csv_ = nullptr;
+  std::size_t num_frames_ = 0;
+  double last_stamp_ = 0.0;
+};
+
+/// @brief Lazy reader of a frame dump: opening reads meta.json and frames.csv only; frames and the
+///        other files are read when asked for.
+/// @note Every malformed file gives plumb::Error naming the file and the line (meta.json: line and
+///       column). const member functions may be called from several threads.
+class FrameDumpReader {
+ public:
+  /// @throws plumb::Error if DIR/meta.json or DIR/frames.csv is missing or malformed.
+  explicit FrameDumpReader(const std::string& dir);
+
+  const FrameDumpMeta& meta() const { return meta_; }
+  const std::string& dir() const { return dir_; }
+  std::size_t num_frames() const { return stamps_.size(); }
+  double stamp(std::size_t i) const;              ///< @throws plumb::Error when out of range
+  const std::vector<double>& stamps() const { return stamps_; }
+  std::string frame_path(std::size_t i) const;    ///< absolute or DIR-relative path of frame i
+  /// @brief Read frame i (LiDAR frame, fields as stored). @throws plumb::Error on a bad file.
+  PointCloud frame(std::size_t i) const;
+
+  bool has_wheels() const;             ///< wheels.csv exists
+  bool has_odometry() const;           ///< odom.csv exists
+  bool has_imu() const;                ///< imu.csv exists
+  bool has_ground_truth() const;       ///< gt.tum exists
+  bool has_ground_truth_dense() const; ///< gt_dense.tum exists
+  std::vector<WheelEncoderReading> wheels() const;   ///< @throws plumb::Error when absent or malformed
+  std::vector<OdomSample> odometry() const;  ///< @throws plumb::Error when absent or malformed
+  std::vector<ImuSample> imu() const;        ///< @throws plumb::Error when absent or malformed
+  Trajectory ground_truth() const;           ///< @throws plumb::Error when absent or malformed
+  Trajectory ground_truth_dense() const;     ///< @throws plumb::Error when absent or malformed
+
+ private:
+  std::string dir_;
+  FrameDumpMeta meta_;
+  std::vector<double> stamps_;
+  std::vector<std::string> files_;
+};
+
+/// @brief meta.json text for `meta` (what FrameDumpWriter writes).
+std::string frame_dump_meta_json(const FrameDumpMeta& meta);
+/// @brief Parse meta.json text; `name` is used in messages.
+/// @throws plumb::Error `name:LINE:COL: message` on malformed JSON, a missing required key
+///         (T_base_lidar) or a value of the wrong kind.
+FrameDumpMeta parse_frame_dump_meta(const std::string& text, const std::string& name = "meta.json");
+
+}  // namespace plumb::io

@@ -1,0 +1,190 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "plumb/bim/floor_plan.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "plumb/core/error.hpp"
+
+namespace plumb::bim {
+
+Eigen::Vector2i OccupancyGrid::cell_of(const Vector2d& p) const {
+  return {static_cast<int>(std::floor((p.x() - origin.x()) / resolution)),
+          static_cast<int>(std::floor((p.y() - origin.y()) / resolution))};
+}
+
+Vector2d OccupancyGrid::center(int ix, int iy) const {
+  return origin + Vector2d((ix + 0.5) * resolution, (iy + 0.5) * resolution);
+}
+
+bool OccupancyGrid::is_free(const Vector2d& p) const {
+  const Eigen::Vector2i c = cell_of(p);
+  return at(c.x(), c.y()) == CellState::kFree;
+}
+
+double OccupancyGrid::free_area() const {
+  const auto n = std::count(cells.begin(), cells.end(), CellState::kFree);
+  return static_cast<double>(n) * resolution * resolution;
+}
+
+namespace {
+
+/// Marks cells whose centre lies inside the triangle a b c, and (when `edges`) every cell an edge
+/// passes through (sampled at a quarter cell), with `mark(index)`.
+template <class Mark>
+void rasterize_triangle(const OccupancyGrid& g, const Vector2d& a, const Vector2d& b, const Vector2d& c,
+                        bool edges, Mark&& mark) {
+  const double area2 = (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
+  if (std::abs(area2) > 1e-12) {
+    const Vector2d lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
+    const Eigen::Vector2i c0 = g.cell_of(lo), c1 = g.cell_of(hi);
+    const int x0 = std::max(c0.x(), 0), y0 = std::max(c0.y(), 0);
+    const int x1 = std::min(c1.x(), g.width - 1), y1 = std::min(c1.y(), g.height - 1);
+    for (int iy = y0; iy <= y1; ++iy) {
+      for (int ix = x0; ix <= x1; ++ix) {
+        const Vector2d p = g.center(ix, iy);
+        const double w0 = ((b - p).x() * (c - p).y() - (b - p).y() * (c - p).x()) / area2;
+        const double w1 = ((c - p).x() * (a - p).y() - (c - p).y() * (a - p).x()) / area2;
+        const double w2 = 1.0 - w0 - w1;
+        if (w0 >= 0.0 && w1 >= 0.0 && w2 >= 0.0) mark(g.index(ix, iy));
+      }
+    }
+  }
+  if (!edges) return;
+  const Vector2d* v[3] = {&a, &b, &c};
+  for (int e = 0; e < 3; ++e) {
+    const Vector2d& p = *v[e];
+    const Vector2d& q = *v[(e + 1) % 3];
+    const double len = (q - p).norm();
+    const int steps = std::max(1, static_cast<int>(std::ceil(len / (0.25 * g.resolution))));
+    for (int s = 0; s <= steps; ++s) {
+      const Eigen::Vector2i cell = g.cell_of(p + (q - p) * (static_cast<double>(s) / steps));
+      if (g.in_bounds(cell.x(), cell.y())) mark(g.index(cell.x(), cell.y()));
+    }
+  }
+}
+
+/// Sutherland-Hodgman clip of a polygon to z >= lo (sign = +1) or z <= hi (sign = -1).
+std::vector<Vector3d> clip_z(const std::vector<Vector3d>& poly, double z, double sign) {
+  std::vector<Vector3d> out;
+  const std::size_t n = poly.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vector3d& p = poly[i];
+    const Vector3d& q = poly[(i + 1) % n];
+    const double dp = sign * (p.z() - z), dq = sign * (q.z() - z);
+    if (dp >= 0.0) out.push_back(p);
+    if ((dp >= 0.0) != (dq >= 0.0)) out.push_back(p + (q - p) * (dp / (dp - dq)));
+  }
+  return out;
+}
+
+bool is_ignored(const BimMesh& mesh, std::int32_t element, const std::vector<std::string>& ignored) {
+  if (element < 0 || static_cast<std::size_t>(element) >= mesh.elements.size()) return false;
+  const std::string& type = mesh.elements[static_cast<std::size_t>(element)].type;
+  return std::find(ignored.begin(), ignored.end(), type) != ignored.end();
+}
+
+OccupancyGrid slice_storey(const BimMesh& mesh, int storey, const FloorPlanSettings& s) {
+  Vector3d lo, hi;
+  mesh.bounds(lo, hi);
+  OccupancyGrid g;
+  g.resolution = s.resolution;
+  g.storey = storey;
+  g.floor_z = mesh.storeys[static_cast<std::size_t>(storey)].elevation;
+  g.origin = lo.head<2>() - Vector2d::Constant(s.margin);
+  const Vector2d extent = hi.head<2>() - lo.head<2>() + Vector2d::Constant(2.0 * s.margin);
+  const double cells_x = std::ceil(extent.x() / s.resolution), cells_y = std::ceil(extent.y() / s.resolution);
+  PLUMB_CHECK(cells_x * cells_y < 2.0e8, "floor_plan: grid of " << cells_x << " x " << cells_y
+                                                                << " cells is too large; raise the resolution");
+  g.width = std::max(1, static_cast<int>(cells_x));
+  g.height = std::max(1, static_cast<int>(cells_y));
+  std::vector<std::uint8_t> floor(static_cast<std::size_t>(g.width) * static_cast<std::size_t>(g.height), 0);
+  std::vector<std::uint8_t> occupied(floor.size(), 0);
+
+  const double floor_lo = g.floor_z - s.floor_below, floor_hi = g.floor_z + s.floor_above;
+  const double slice_lo = g.floor_z + s.slice_min, slice_hi = g.floor_z + s.slice_max;
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const std::int32_t element = t < mesh.triangle_element.size() ? mesh.triangle_element[t] : -1;
+    if (is_ignored(mesh, element, s.ignored_types)) continue;
+    const auto& tri = mesh.triangles[t];
+    const Vector3d& a = mesh.vertices[tri[0]];
+    const Vector3d& b = mesh.vertices[tri[1]];
+    const Vector3d& c = mesh.vertices[tri[2]];
+    const double zmin = std::min({a.z(), b.z(), c.z()}), zmax = std::max({a.z(), b.z(), c.z()});
+    // Floor: a (near) horizontal triangle within the floor band.
+    const Vector3d n = (b - a).cross(c - a);
+    const double nn = n.norm();
+    if (nn > 0.0 && std::abs(n.z()) > 0.95 * nn && zmin >= floor_lo && zmax <= floor_hi) {
+      rasterize_triangle(g, a.head<2>(), b.head<2>(), c.head<2>(), false,
+                         [&](std::size_t i) { floor[i] = 1; });
+    }
+    // Obstacles: the part of the triangle inside the slice.
+    if (zmax < slice_lo || zmin > slice_hi) continue;
+    std::vector<Vector3d> poly = clip_z(clip_z({a, b, c}, slice_lo, 1.0), slice_hi, -1.0);
+    if (poly.empty()) continue;
+    if (poly.size() < 3) poly.resize(3, poly.back());
+    for (std::size_t k = 1; k + 1 < poly.size(); ++k) {
+      rasterize_triangle(g, poly[0].head<2>(), poly[k].head<2>(), poly[k + 1].head<2>(), true,
+                         [&](std::size_t i) { occupied[i] = 1; });
+    }
+  }
+  g.cells.resize(floor.size());
+  for (std::size_t i = 0; i < floor.size(); ++i) {
+    g.cells[i] = occupied[i] ? CellState::kOccupied : (floor[i] ? CellState::kFree : CellState::kOutside);
+  }
+  return g;
+}
+
+void check_settings(const BimMesh& mesh, const FloorPlanSettings& s) {
+  PLUMB_CHECK(s.resolution > 0.0 && std::isfinite(s.resolution),
+              "floor_plan: resolution must be positive, got " << s.resolution);
+  PLUMB_CHECK(s.slice_max > s.slice_min, "floor_plan: slice_max (" << s.slice_max << ") must exceed slice_min ("
+                                                                   << s.slice_min << ")");
+  PLUMB_CHECK(s.margin >= 0.0, "floor_plan: margin must not be negative");
+  PLUMB_CHECK(!mesh.triangles.empty(), "floor_plan: the mesh has no triangles");
+  PLUMB_CHECK(!mesh.storeys.empty(), "floor_plan: the model has no storey (IfcBuildingStorey); nothing is walkable");
+}
+
+}  // namespace
+
+std::vector<double> storey_free_areas(const BimMesh& mesh, const FloorPlanSettings& settings) {
+  check_settings(mesh, settings);
+  std::vector<double> areas;
+  for (std::size_t k = 0; k < mesh.storeys.size(); ++k) {
+    areas.push_back(slice_storey(mesh, static_cast<int>(k), settings).free_area());
+  }
+  return areas;
+}
+
+OccupancyGrid floor_plan(const BimMesh& mesh, const FloorPlanSettings& settings) {
+  check_settings(mesh, settings);
+  const int num_storeys = static_cast<int>(mesh.storeys.size());
+  if (settings.storey >= 0) {
+    PLUMB_CHECK(settings.storey < num_storeys, "floor_plan: storey " << settings.storey << " does not exist (the model has "
+                                                                     << num_storeys << " storeys)");
+    OccupancyGrid g = slice_storey(mesh, settings.storey, settings);
+    const auto& st = mesh.storeys[static_cast<std::size_t>(settings.storey)];
+    PLUMB_CHECK(g.free_area() >= settings.min_walkable_area,
+                "floor_plan: storey " << settings.storey << " '" << st.name << "' (elevation " << st.elevation
+                                      << " m) is not walkable: " << g.free_area() << " m^2 of free floor < "
+                                      << settings.min_walkable_area << " m^2");
+    return g;
+  }
+  OccupancyGrid best;
+  double best_area = -1.0;
+  for (int k = 0; k < num_storeys; ++k) {
+    OccupancyGrid g = slice_storey(mesh, k, settings);
+    const double area = g.free_area();
+    if (area > best_area) {
+      best_area = area;
+      best = std::move(g);
+    }
+  }
+  PLUMB_CHECK(best_area >= settings.min_walkable_area,
+              "floor_plan: no walkable storey in the model: the largest free floor area of its "
+                  << num_storeys << " storeys is " << best_area << " m^2 < " << settings.min_walkable_area
+                  << " m^2 (no floor slab near a storey elevation, or every floor is blocked)");
+  return best;
+}
+
+}  // namespace plumb::bim

@@ -1,0 +1,698 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "plumb/io/frame_dump.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+#include <string_view>
+#include <system_error>
+#include <utility>
+
+#include "plumb/core/error.hpp"
+#include "plumb/io/trajectory.hpp"
+#include "plumb/io/wheel_encoders.hpp"
+
+namespace plumb::io {
+namespace {
+
+namespace fs = std::filesystem;
+
+// ---- numbers -------------------------------------------------------------------------------------
+
+void append_double(std::string& out, double value) {
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  out.append(buffer, result.ptr);
+}
+
+std::string join_path(const std::string& dir, const std::string& name) {
+  return (fs::path(dir) / name).string();
+}
+
+// ---- a small strict JSON reader (RFC 8259 subset: no \u escapes beyond ASCII) ---------------------
+
+struct JsonValue {
+  enum class Kind { kNull, kBool, kNumber, kString, kArray, kObject };
+  Kind kind = Kind::kNull;
+  bool boolean = false;
+  double number = 0.0;
+  std::string string;
+  std::vector<JsonValue> array;
+  std::vector<std::pair<std::string, JsonValue>> object;
+  int line = 1, column = 1;  // where the value starts
+
+  const JsonValue* find(const std::string& key) const {
+    for (const auto& [k, v] : object) {
+      if (k == key) return &v;
+    }
+    return nullptr;
+  }
+};
+
+class JsonParser {
+ public:
+  JsonParser(const std::string& text, const std::string& name) : text_(text), name_(name) {}
+
+  JsonValue parse_document() {
+    skip_space();
+    JsonValue v = parse_value(0);
+    skip_space();
+    if (pos_ != text_.size()) fail("unexpected text after the JSON value");
+    return v;
+  }
+
+  [[noreturn]] void fail(const std::string& message) const {
+    PLUMB_THROW(name_ << ':' << line_ << ':' << column_ << ": " << message);
+  }
+
+ private:
+  char peek() const { return pos_ < text_.size() ? text_[pos_] : '\0'; }
+  bool at_end() const { return pos_ >= text_.size(); }
+  void advance() {
+    if (text_[pos_] == '\n') {
+      ++line_;
+      column_ = 1;
+    } else {
+      ++column_;
+    }
+    ++pos_;
+  }
+  void skip_space() {
+    while (!at_end() && (peek() == ' ' || peek() == '\t' || peek() == '\r' || peek() == '\n')) advance();
+  }
+  void expect(char c) {
+    if (at_end() || peek() != c) fail(std::string("expected '") + c + "'");
+    advance();
+  }
+  void expect_word(const char* word) {
+    for (const char* p = word; *p != '\0'; ++p) {
+      if (at_end() || peek() != *p) fail(std::string("invalid literal, expected '") + word + "'");
+      advance();
+    }
+  }
+
+  JsonValue parse_value(int depth) {
+    if (depth > 64) fail("nesting too deep");
+    JsonValue v;
+    v.line = line_;
+    v.column = column_;
+    if (at_end()) fail("unexpected end of file");
+    const char c = peek();
+    if (c == '{') {
+      v.kind = JsonValue::Kind::kObject;
+      advance();
+      skip_space();
+      if (peek() == '}') {
+        advance();
+        return v;
+      }
+      for (;;) {
+        skip_space();
+        if (peek() != '"') fail("expected a string key");
+        std::string key = parse_string();
+        for (const auto& kv : v.object) {
+          if (kv.first == key) fail("duplicate key \"" + key + "\"");
+        }
+        skip_space();
+        expect(':');
+        skip_space();
+        v.object.emplace_back(std::move(key), parse_value(depth + 1));
+        skip_space();
+        if (peek() == ',') {
+          advance();
+          continue;
+        }
+        expect('}');
+        return v;
+      }
+    }
+    if (c == '[') {
+      v.kind = JsonValue::Kind::kArray;
+      advance();
+      skip_space();
+      if (peek() == ']') {
+        advance();
+        return v;
+      }
+      for (;;) {
+        skip_space();
+        v.array.push_back(parse_value(depth + 1));
+        skip_space();
+        if (peek() == ',') {
+          advance();
+          continue;
+        }
+        expect(']');
+        return v;
+      }
+    }
+    if (c == '"') {
+      v.kind = JsonValue::Kind::kString;
+      v.string = parse_string();
+      return v;
+    }
+    if (c == 't') {
+      expect_word("true");
+      v.kind = JsonValue::Kind::kBool;
+      v.boolean = true;
+      return v;
+    }
+    if (c == 'f') {
+      expect_word("false");
+      v.kind = JsonValue::Kind::kBool;
+      return v;
+    }
+    if (c == 'n') {
+      expect_word("null");
+      return v;
+    }
+    if (c == '-' || (c >= '0' && c <= '9')) {
+      v.kind = JsonValue::Kind::kNumber;
+      v.number = parse_number();
+      return v;
+    }
+    fail(std::string("unexpected character '") + c + "'");
+  }
+
+  std::string parse_string() {
+    expect('"');
+    std::string out;
+    for (;;) {
+      if (at_end()) fail("unterminated string");
+      const char c = peek();
+      if (c == '"') {
+        advance();
+        return out;
+      }
+      if (static_cast<unsigned char>(c) < 0x20) fail("control character in string");
+      if (c == '\\') {
+        advance();
+        if (at_end()) fail("unterminated string");
+        const char e = peek();
+        switch (e) {
+          case '"': out += '"'; break;
+          case '\\': out += '\\'; break;
+          case '/': out += '/'; break;
+          case 'b': out += '\b'; break;
+          case 'f': out += '\f'; break;
+          case 'n': out += '\n'; break;
+          case 'r': out += '\r'; break;
+          case 't': out += '\t'; break;
+          case 'u': {
+            unsigned code = 0;
+            for (int k = 0; k < 4; ++k) {
+              advance();
+              const char h = peek();
+              code <<= 4;
+              if (h >= '0' && h <= '9') code |= static_cast<unsigned>(h - '0');
+              else if (h >= 'a' && h <= 'f') code |= static_cast<unsigned>(h - 'a' + 10);
+              else if (h >= 'A' && h <= 'F') code |= static_cast<unsigned>(h - 'A' + 10);
+              else fail("bad \\u escape");
+            }
+            if (code >= 0x80) fail("non-ASCII \\u escape not supported");
+            out += static_cast<char>(code);
+            break;
+          }
+          default: fail(std::string("bad escape '\\") + e + "'");
+        }
+        advance();
+        continue;
+      }
+      out += c;
+      advance();
+    }
+  }
+
+  double parse_number() {
+    const std::size_t begin = pos_;
+    if (peek() == '-') advance();
+    if (!(peek() >= '0' && peek() <= '9')) fail("bad number");
+    while (peek() >= '0' && peek() <= '9') advance();
+    if (peek() == '.') {
+      advance();
+      if (!(peek() >= '0' && peek() <= '9')) fail("bad number");
+      while (peek() >= '0' && peek() <= '9') advance();
+    }
+    if (peek() == 'e' || peek() == 'E') {
+      advance();
+      if (peek() == '+' || peek() == '-') advance();
+      if (!(peek() >= '0' && peek() <= '9')) fail("bad number");
+      while (peek() >= '0' && peek() <= '9') advance();
+    }
+    double value = 0.0;
+    const auto result = std::from_chars(text_.data() + begin, text_.data() + pos_, value);
+    if (result.ec != std::errc() || !std::isfinite(value)) fail("number out of range");
+    return value;
+  }
+
+  const std::string& text_;
+  const std::string& name_;
+  std::size_t pos_ = 0;
+  int line_ = 1, column_ = 1;
+};
+
+[[noreturn]] void fail_at(const std::string& name, const JsonValue& v, const std::string& message) {
+  PLUMB_THROW(name << ':' << v.line << ':' << v.column << ": " << message);
+}
+
+double get_number(const std::string& name, const JsonValue& v, const char* key) {
+  if (v.kind != JsonValue::Kind::kNumber) fail_at(name, v, std::string("\"") + key + "\" must be a number");
+  return v.number;
+}
+
+std::string get_string(const std::string& name, const JsonValue& v, const char* key) {
+  if (v.kind != JsonValue::Kind::kString) fail_at(name, v, std::string("\"") + key + "\" must be a string");
+  return v.string;
+}
+
+std::vector<double> get_numbers(const std::string& name, const JsonValue& v, const char* key) {
+  if (v.kind != JsonValue::Kind::kArray) fail_at(name, v, std::string("\"") + key + "\" must be an array of numbers");
+  std::vector<double> out;
+  for (const JsonValue& e : v.array) out.push_back(get_number(name, e, key));
+  return out;
+}
+
+Eigen::Isometry3d get_transform(const std::string& name, const JsonValue& v, const char* key) {
+  const std::vector<double> m = get_numbers(name, v, key);
+  if (m.size() != 16) {
+    fail_at(name, v, std::string("\"") + key + "\" must hold 16 numbers (4x4 row-major), got " +
+                         std::to_string(m.size()));
+  }
+  Eigen::Matrix4d M;
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) M(r, c) = m[static_cast<std::size_t>(4 * r + c)];
+  if (std::abs(M(3, 0)) > 1e-9 || std::abs(M(3, 1)) > 1e-9 || std::abs(M(3, 2)) > 1e-9 ||
+      std::abs(M(3, 3) - 1.0) > 1e-9) {
+    fail_at(name, v, std::string("\"") + key + "\": last row must be 0 0 0 1");
+  }
+  const Eigen::Matrix3d R = M.topLeftCorner<3, 3>();
+  const double orthogonality = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (!(orthogonality < 1e-6) || R.determinant() <= 0.0) {
+    fail_at(name, v, std::string("\"") + key + "\": upper-left 3x3 block is not a rotation");
+  }
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::Quaterniond(R).normalized().toRotationMatrix();
+  T.translation() = M.topRightCorner<3, 1>();
+  return T;
+}
+
+void append_transform(std::string& out, const Eigen::Isometry3d& T) {
+  const Eigen::Matrix4d M = T.matrix();
+  out += '[';
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) {
+      if (r + c > 0) out += ", ";
+      append_double(out, M(r, c));
+    }
+  }
+  out += ']';
+}
+
+void append_string(std::string& out, const std::string& s) {
+  out += '"';
+  for (char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (c == '\n') {
+      out += "\\n";
+    } else if (c == '\t') {
+      out += "\\t";
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof(buf), "\\u%04x", static_cast<unsigned>(c));
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  out += '"';
+}
+
+// ---- CSV -----------------------------------------------------------------------------------------
+
+bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r'; }
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && is_space(s.front())) s.remove_prefix(1);
+  while (!s.empty() && is_space(s.back())) s.remove_suffix(1);
+  return s;
+}
+
+std::vector<std::string_view> split_commas(std::string_view line) {
+  std::vector<std::string_view> fields;
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t comma = line.find(',', start);
+    fields.push_back(trim(line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start)));
+    if (comma == std::string_view::npos) break;
+    start = comma + 1;
+  }
+  return fields;
+}
+
+/// Reads a CSV file with a fixed header; calls `row(fields, line_number)` for every data row.
+template <class Row>
+void read_csv(const std::string& path, const char* header, Row&& row) {
+  std::ifstream in(path, std::ios::binary);
+  PLUMB_CHECK(in.is_open(), path << ": cannot open file");
+  std::string buffer;
+  int line_number = 0;
+  bool have_header = false;
+  const std::vector<std::string_view> expected = split_commas(header);
+  while (std::getline(in, buffer)) {
+    ++line_number;
+    const std::string_view line = trim(buffer);
+    if (line.empty() || line.front() == '#') continue;
+    std::vector<std::string_view> fields = split_commas(line);
+    if (!have_header) {
+      PLUMB_CHECK(fields == expected, path << ':' << line_number << ": expected the header line '" << header
+                                           << "', got '" << line << "'");
+      have_header = true;
+      continue;
+    }
+    PLUMB_CHECK(fields.size() == expected.size(), path << ':' << line_number << ": expected " << expected.size()
+                                                       << " comma-separated fields, got " << fields.size());
+    row(fields, line_number);
+  }
+  PLUMB_CHECK(!in.bad(), path << ": read error after line " << line_number);
+  PLUMB_CHECK(have_header, path << ": empty file (expected the header line '" << header << "')");
+}
+
+double parse_double(std::string_view field, const std::string& path, int line_number, const char* what) {
+  double value = 0.0;
+  const char* first = field.data();
+  const char* last = field.data() + field.size();
+  if (!field.empty() && *first == '+') ++first;
+  const auto result = std::from_chars(first, last, value);
+  PLUMB_CHECK(!field.empty() && result.ec == std::errc() && result.ptr == last && std::isfinite(value),
+              path << ':' << line_number << ": " << what << " is not a finite number: '" << field << "'");
+  return value;
+}
+
+/// Parses every field as a double into `out` and checks the stamp (field 0) increases strictly.
+void parse_row(const std::vector<std::string_view>& fields, const std::string& path, int line_number,
+               const char* const* names, double* out, double& last_stamp, bool first) {
+  for (std::size_t k = 0; k < fields.size(); ++k) out[k] = parse_double(fields[k], path, line_number, names[k]);
+  PLUMB_CHECK(first || out[0] > last_stamp, path << ':' << line_number << ": stamp " << out[0]
+                                                 << " does not increase (previous " << last_stamp << ")");
+  last_stamp = out[0];
+}
+
+void write_text_file(const std::string& path, const std::string& text) {
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  PLUMB_CHECK(f != nullptr, path << ": cannot open for writing: " << std::strerror(errno));
+  const std::size_t written = text.empty() ? 0 : std::fwrite(text.data(), 1, text.size(), f);
+  const bool close_failed = std::fclose(f) != 0;
+  PLUMB_CHECK(written == text.size() && !close_failed, path << ": write failed");
+}
+
+template <class T, class Format>
+void write_csv(const std::string& path, const char* header, const std::vector<T>& rows, Format&& format) {
+  std::string text = header;
+  text += '\n';
+  double last = 0.0;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const double stamp = rows[i].stamp;
+    PLUMB_CHECK(std::isfinite(stamp) && (i == 0 || stamp > last),
+                path << ": row " << i << ": stamp " << stamp << " does not increase");
+    last = stamp;
+    format(text, rows[i]);
+    text += '\n';
+  }
+  write_text_file(path, text);
+}
+
+void append_values(std::string& out, std::initializer_list<double> values) {
+  bool first = true;
+  for (double v : values) {
+    if (!first) out += ',';
+    first = false;
+    PLUMB_CHECK(std::isfinite(v), "frame dump writer: non-finite value " << v);
+    append_double(out, v);
+  }
+}
+
+constexpr const char* kFramesHeader = "index,stamp,file";
+constexpr const char* kOdomHeader = "stamp,x,y,theta";
+constexpr const char* kImuHeader = "stamp,wx,wy,wz,ax,ay,az";
+
+}  // namespace
+
+// ---- meta.json -----------------------------------------------------------------------------------
+
+std::string frame_dump_meta_json(const FrameDumpMeta& meta) {
+  std::string s = "{\n  \"format\": \"plumb-frame-dump\",\n  \"version\": 1,\n";
+  s += "  \"units\": {\"length\": \"m\", \"angle\": \"rad\", \"time\": \"s\", \"point_time\": \"s since the frame stamp\"},\n";
+  s += "  \"source\": ";
+  append_string(s, meta.source);
+  s += ",\n  \"model\": ";
+  append_string(s, meta.model);
+  s += ",\n  \"scenario\": ";
+  append_string(s, meta.scenario);
+  s += ",\n  \"lidar\": {\"name\": ";
+  append_string(s, meta.lidar.name);
+  s += ", \"rate_hz\": ";
+  append_double(s, meta.lidar.rate_hz);
+  s += ", \"columns\": " + std::to_string(meta.lidar.columns) + ", \"min_range\": ";
+  append_double(s, meta.lidar.min_range);
+  s += ", \"max_range\": ";
+  append_double(s, meta.lidar.max_range);
+  s += ", \"elevations_rad\": [";
+  for (std::size_t i = 0; i < meta.lidar.elevations_rad.size(); ++i) {
+    if (i > 0) s += ", ";
+    append_double(s, meta.lidar.elevations_rad[i]);
+  }
+  s += "]},\n  \"T_base_lidar\": ";
+  append_transform(s, meta.T_base_lidar);
+  s += ",\n  \"T_base_imu\": ";
+  append_transform(s, meta.T_base_imu);
+  s += ",\n  \"imu_rate_hz\": ";
+  append_double(s, meta.imu_rate_hz);
+  s += ",\n  \"wheel_radius_left\": ";
+  append_double(s, meta.wheel_radius_left);
+  s += ",\n  \"wheel_radius_right\": ";
+  append_double(s, meta.wheel_radius_right);
+  s += ",\n  \"axle\": ";
+  append_double(s, meta.axle);
+  s += ",\n  \"origin_offset\": [";
+  for (int k = 0; k < 3; ++k) {
+    if (k > 0) s += ", ";
+    append_double(s, meta.origin_offset[k]);
+  }
+  s += "]\n}\n";
+  return s;
+}
+
+FrameDumpMeta parse_frame_dump_meta(const std::string& text, const std::string& name) {
+  JsonParser parser(text, name);
+  const JsonValue root = parser.parse_document();
+  if (root.kind != JsonValue::Kind::kObject) fail_at(name, root, "the document must be a JSON object");
+  FrameDumpMeta meta;
+  if (const JsonValue* v = root.find("format")) {
+    const std::string format = get_string(name, *v, "format");
+    if (format != "plumb-frame-dump") fail_at(name, *v, "\"format\" must be \"plumb-frame-dump\", got \"" + format + "\"");
+  }
+  if (const JsonValue* v = root.find("version")) {
+    const double version = get_number(name, *v, "version");
+    if (version != 1.0) fail_at(name, *v, "unsupported \"version\" (this reader knows version 1)");
+  }
+  const JsonValue* lidar_T = root.find("T_base_lidar");
+  if (lidar_T == nullptr) fail_at(name, root, "missing required key \"T_base_lidar\"");
+  meta.T_base_lidar = get_transform(name, *lidar_T, "T_base_lidar");
+  if (const JsonValue* v = root.find("T_base_imu")) meta.T_base_imu = get_transform(name, *v, "T_base_imu");
+  auto non_negative = [&](const char* key, double& out) {
+    if (const JsonValue* v = root.find(key)) {
+      out = get_number(name, *v, key);
+      if (out < 0.0) fail_at(name, *v, std::string("\"") + key + "\" must not be negative");
+    }
+  };
+  non_negative("wheel_radius_left", meta.wheel_radius_left);
+  non_negative("wheel_radius_right", meta.wheel_radius_right);
+  non_negative("axle", meta.axle);
+  non_negative("imu_rate_hz", meta.imu_rate_hz);
+  if (const JsonValue* v = root.find("origin_offset")) {
+    const std::vector<double> o = get_numbers(name, *v, "origin_offset");
+    if (o.size() != 3) fail_at(name, *v, "\"origin_offset\" must hold 3 numbers");
+    meta.origin_offset = Vector3d(o[0], o[1], o[2]);
+  }
+  if (const JsonValue* v = root.find("source")) meta.source = get_string(name, *v, "source");
+  if (const JsonValue* v = root.find("model")) meta.model = get_string(name, *v, "model");
+  if (const JsonValue* v = root.find("scenario")) meta.scenario = get_string(name, *v, "scenario");
+  if (const JsonValue* l = root.find("lidar")) {
+    if (l->kind != JsonValue::Kind::kObject) fail_at(name, *l, "\"lidar\" must be an object");
+    if (const JsonValue* v = l->find("name")) meta.lidar.name = get_string(name, *v, "name");
+    if (const JsonValue* v = l->find("rate_hz")) meta.lidar.rate_hz = get_number(name, *v, "rate_hz");
+    if (const JsonValue* v = l->find("columns")) {
+      const double c = get_number(name, *v, "columns");
+      if (c < 0 || c != std::floor(c) || c > 1e7) fail_at(name, *v, "\"columns\" must be a non-negative integer");
+      meta.lidar.columns = static_cast<int>(c);
+    }
+    if (const JsonValue* v = l->find("min_range")) meta.lidar.min_range = get_number(name, *v, "min_range");
+    if (const JsonValue* v = l->find("max_range")) meta.lidar.max_range = get_number(name, *v, "max_range");
+    if (const JsonValue* v = l->find("elevations_rad")) meta.lidar.elevations_rad = get_numbers(name, *v, "elevations_rad");
+  }
+  return meta;
+}
+
+// ---- writer --------------------------------------------------------------------------------------
+
+FrameDumpWriter::FrameDumpWriter(const std::string& dir, const FrameDumpMeta& meta,
+                                 const FrameDumpWriteSettings& settings)
+    : dir_(dir), settings_(settings) {
+  PLUMB_CHECK(!dir.empty(), "FrameDumpWriter: empty directory name");
+  std::error_code ec;
+  fs::create_directories(fs::path(dir) / "frames", ec);
+  PLUMB_CHECK(!ec, dir << ": cannot create the frame dump directory: " << ec.message());
+  const std::string meta_path = join_path(dir, "meta.json");
+  PLUMB_CHECK(settings.overwrite || !fs::exists(meta_path),
+              dir << ": already holds a frame dump (meta.json); refusing to overwrite");
+  write_text_file(meta_path, frame_dump_meta_json(meta));
+  const std::string frames_path = join_path(dir, "frames.csv");
+  frames_csv_ = std::fopen(frames_path.c_str(), "wb");
+  PLUMB_CHECK(frames_csv_ != nullptr, frames_path << ": cannot open for writing: " << std::strerror(errno));
+  std::fprintf(frames_csv_, "%s\n", kFramesHeader);
+}
+
+FrameDumpWriter::~FrameDumpWriter() {
+  try {
+    close();
+  } catch (const Error&) {  // a destructor must not throw; close() explicitly to see errors
+  }
+}
+
+void FrameDumpWriter::add_frame(double stamp, const PointCloud& cloud_lidar) {
+  PLUMB_CHECK(frames_csv_ != nullptr, dir_ << ": FrameDumpWriter::add_frame after close()");
+  PLUMB_CHECK(std::isfinite(stamp) && (num_frames_ == 0 || stamp > last_stamp_),
+              dir_ << ": frame " << num_frames_ << ": stamp " << stamp << " does not increase (previous "
+                   << last_stamp_ << ")");
+  char name[32];
+  std::snprintf(name, sizeof(name), "frames/%06zu.pcd", num_frames_);
+  PcdWriteSettings pcd;
+  pcd.encoding = settings_.encoding;
+  write_pcd(join_path(dir_, name), cloud_lidar, pcd);
+  std::string line = std::to_string(num_frames_) + ",";
+  append_double(line, stamp);
+  line += ',';
+  line += name;
+  line += '\n';
+  PLUMB_CHECK(std::fwrite(line.data(), 1, line.size(), frames_csv_) == line.size(),
+              join_path(dir_, "frames.csv") << ": write failed");
+  last_stamp_ = stamp;
+  ++num_frames_;
+}
+
+void FrameDumpWriter::write_wheels(const std::vector<WheelEncoderReading>& wheels) {
+  write_wheel_encoders(wheels, join_path(dir_, "wheels.csv"));
+}
+
+void FrameDumpWriter::write_odometry(const std::vector<OdomSample>& odometry) {
+  write_csv(join_path(dir_, "odom.csv"), kOdomHeader, odometry, [](std::string& s, const OdomSample& o) {
+    append_values(s, {o.stamp, o.pose.x, o.pose.y, o.pose.theta});
+  });
+}
+
+void FrameDumpWriter::write_imu(const std::vector<ImuSample>& imu) {
+  write_csv(join_path(dir_, "imu.csv"), kImuHeader, imu, [](std::string& s, const ImuSample& m) {
+    append_values(s, {m.stamp, m.w_imu.x(), m.w_imu.y(), m.w_imu.z(), m.f_imu.x(), m.f_imu.y(), m.f_imu.z()});
+  });
+}
+
+void FrameDumpWriter::write_ground_truth(const Trajectory& T_world_base) {
+  write_tum(T_world_base, join_path(dir_, "gt.tum"));
+}
+
+void FrameDumpWriter::write_ground_truth_dense(const Trajectory& T_world_base) {
+  write_tum(T_world_base, join_path(dir_, "gt_dense.tum"));
+}
+
+void FrameDumpWriter::close() {
+  if (frames_csv_ == nullptr) return;
+  const bool failed = std::fclose(frames_csv_) != 0;
+  frames_csv_ = nullptr;
+  PLUMB_CHECK(!failed, join_path(dir_, "frames.csv") << ": write failed");
+}
+
+// ---- reader --------------------------------------------------------------------------------------
+
+FrameDumpReader::FrameDumpReader(const std::string& dir) : dir_(dir) {
+  const std::string meta_path = join_path(dir, "meta.json");
+  std::ifstream in(meta_path, std::ios::binary);
+  PLUMB_CHECK(in.is_open(), meta_path << ": cannot open file (not a frame dump directory?)");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  meta_ = parse_frame_dump_meta(text, meta_path);
+
+  const std::string frames_path = join_path(dir, "frames.csv");
+  static const char* const kNames[] = {"index", "stamp"};
+  double last = 0.0;
+  read_csv(frames_path, kFramesHeader, [&](const std::vector<std::string_view>& f, int line) {
+    const double index = parse_double(f[0], frames_path, line, kNames[0]);
+    PLUMB_CHECK(index == static_cast<double>(stamps_.size()),
+                frames_path << ':' << line << ": index " << f[0] << ", expected " << stamps_.size());
+    const double stamp = parse_double(f[1], frames_path, line, kNames[1]);
+    PLUMB_CHECK(stamps_.empty() || stamp > last,
+                frames_path << ':' << line << ": stamp " << stamp << " does not increase (previous " << last << ")");
+    PLUMB_CHECK(!f[2].empty(), frames_path << ':' << line << ": empty file name");
+    last = stamp;
+    stamps_.push_back(stamp);
+    files_.emplace_back(f[2]);
+  });
+}
+
+double FrameDumpReader::stamp(std::size_t i) const {
+  PLUMB_CHECK(i < stamps_.size(), dir_ << ": frame " << i << " out of range (" << stamps_.size() << " frames)");
+  return stamps_[i];
+}
+
+std::string FrameDumpReader::frame_path(std::size_t i) const {
+  PLUMB_CHECK(i < files_.size(), dir_ << ": frame " << i << " out of range (" << files_.size() << " frames)");
+  const fs::path p(files_[i]);
+  return p.is_absolute() ? p.string() : (fs::path(dir_) / p).string();
+}
+
+PointCloud FrameDumpReader::frame(std::size_t i) const { return read_pcd(frame_path(i)); }
+
+bool FrameDumpReader::has_wheels() const { return fs::exists(join_path(dir_, "wheels.csv")); }
+bool FrameDumpReader::has_odometry() const { return fs::exists(join_path(dir_, "odom.csv")); }
+bool FrameDumpReader::has_imu() const { return fs::exists(join_path(dir_, "imu.csv")); }
+bool FrameDumpReader::has_ground_truth() const { return fs::exists(join_path(dir_, "gt.tum")); }
+bool FrameDumpReader::has_ground_truth_dense() const { return fs::exists(join_path(dir_, "gt_dense.tum")); }
+
+std::vector<WheelEncoderReading> FrameDumpReader::wheels() const {
+  return read_wheel_encoders(join_path(dir_, "wheels.csv"));
+}
+
+std::vector<OdomSample> FrameDumpReader::odometry() const {
+  const std::string path = join_path(dir_, "odom.csv");
+  static const char* const kNames[] = {"stamp", "x", "y", "theta"};
+  std::vector<OdomSample> out;
+  double last = 0.0;
+  read_csv(path, kOdomHeader, [&](const std::vector<std::string_view>& f, int line) {
+    double v[4];
+    parse_row(f, path, line, kNames, v, last, out.empty());
+    out.push_back({v[0], Pose2{v[1], v[2], v[3]}});
+  });
+  return out;
+}
+
+std::vector<ImuSample> FrameDumpReader::imu() const {
+  const std::string path = join_path(dir_, "imu.csv");
+  static const char* const kNames[] = {"stamp", "wx", "wy", "wz", "ax", "ay", "az"};
+  std::vector<ImuSample> out;
+  double last = 0.0;
+  read_csv(path, kImuHeader, [&](const std::vector<std::string_view>& f, int line) {
+    double v[7];
+    parse_row(f, path, line, kNames, v, last, out.empty());
+    out.push_back({v[0], Vector3d(v[1], v[2], v[3]), Vector3d(v[4], v[5], v[6])});
+  });
+  return out;
+}
+
+Trajectory FrameDumpReader::ground_truth() const { return read_tum(join_path(dir_, "gt.tum")); }
+Trajectory FrameDumpReader::ground_truth_dense() const { return read_tum(join_path(dir_, "gt_dense.tum")); }
+
+}  // namespace plumb::io
