@@ -2,6 +2,7 @@
 #include "plumb/sim/world.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <unordered_map>
@@ -57,14 +58,6 @@ void append_box(const ClutterBox& box, std::vector<Vector3d>& vertices,
     triangles.push_back({base + q[0], base + q[1], base + q[2]});
     triangles.push_back({base + q[0], base + q[2], base + q[3]});
   }
-}
-
-/// Distance in the xy plane from point p to the segment a-b.
-double segment_distance_xy(const Vector3d& p, const Vector3d& a, const Vector3d& b) {
-  const Vector2d ab = (b - a).head<2>(), ap = (p - a).head<2>();
-  const double len_sq = ab.squaredNorm();
-  const double s = len_sq > 0.0 ? std::clamp(ap.dot(ab) / len_sq, 0.0, 1.0) : 0.0;
-  return (ap - s * ab).norm();
 }
 
 double footprint_radius(const ClutterBox& b) { return b.half_size.head<2>().norm(); }
@@ -217,8 +210,19 @@ World::World(const bim::BimMesh& mesh, const WorldSettings& settings)
       }
       return false;
     };
-    // A random floor point with head room: the floor is the top surface there and a ceiling lies
-    // 2..6 m above (so the point is indoors).
+    // Horizontal ranges in 16 directions at 0.4 m above a floor point (capped at 3 m).
+    constexpr int kDirs = 16;
+    auto horizontal_ranges = [&](const Vector3d& p, std::array<RayHit, kDirs>& hits) {
+      for (int k = 0; k < kDirs; ++k) {
+        const double az = 2.0 * kPi * k / kDirs;
+        hits[static_cast<std::size_t>(k)] =
+            bim_caster.cast(p + Vector3d(0, 0, 0.4), Vector3d(std::cos(az), std::sin(az), 0.0), 3.0);
+      }
+    };
+    // A random floor point in free space: the floor is the top surface there, a ceiling lies 2..6 m
+    // above (indoors), and no two opposite horizontal rays meet surfaces less than 1 m apart (a
+    // point inside a wall's solid would see both of its faces close by).
+    std::array<RayHit, kDirs> around;
     auto sample_floor = [&](Vector3d& p) -> bool {
       if (floor_tri.empty()) return false;
       const double u = rng.uniform(0.0, total_area);
@@ -234,9 +238,16 @@ World::World(const bim::BimMesh& mesh, const WorldSettings& settings)
       if (!down.hit() || std::abs(down.range - 0.5) > 0.02) return false;
       p = q + Vector3d(0, 0, 0.5 - down.range);
       const RayHit up = bim_caster.cast(p + Vector3d(0, 0, 0.01), Vector3d::UnitZ(), 6.0);
-      return up.hit() && up.range > 2.0;
+      if (!up.hit() || up.range < 2.0) return false;
+      horizontal_ranges(p, around);
+      for (int k = 0; k < kDirs / 2; ++k) {
+        const double width = std::min(3.0, around[static_cast<std::size_t>(k)].range) +
+                             std::min(3.0, around[static_cast<std::size_t>(k + kDirs / 2)].range);
+        if (width < 1.0) return false;
+      }
+      return true;
     };
-    // Floor under the whole of a footprint point and nothing standing there up to `height`.
+    // Floor under a footprint point (level with `floor_z`) and nothing standing there up to `height`.
     auto column_clear = [&](const Vector3d& floor_point, double height) {
       const RayHit down = bim_caster.cast(floor_point + Vector3d(0, 0, height), -Vector3d::UnitZ(), height + 0.2);
       return down.hit() && std::abs(down.range - height) < 0.03;
@@ -249,18 +260,19 @@ World::World(const bim::BimMesh& mesh, const WorldSettings& settings)
       Vector3d p;
       if (!sample_floor(p)) continue;
       const FurnitureKind kind = kFurniture[rng.uniform_index(std::size(kFurniture))];
-      // Nearest wall-like surface at knee height, 16 directions.
+      // Nearest wall at knee height.
       double nearest = kInf;
       Vector3d wall_normal = Vector3d::Zero();
-      for (int k = 0; k < 16; ++k) {
-        const double az = 2.0 * kPi * k / 16.0;
-        const Vector3d d(std::cos(az), std::sin(az), 0.0);
-        const RayHit h = bim_caster.cast(p + Vector3d(0, 0, 0.4), d, 3.0);
-        if (h.hit() && h.range < nearest) {
-          const Vector3d n(h.normal.x(), h.normal.y(), 0.0);
-          if (n.norm() < 0.7) continue;
+      for (int k = 0; k < kDirs; ++k) {
+        const RayHit& h = around[static_cast<std::size_t>(k)];
+        if (!h.hit() || h.element < 0 || element_class_[static_cast<std::size_t>(h.element)] != kSimWall) continue;
+        const Vector3d n(h.normal.x(), h.normal.y(), 0.0);
+        if (n.norm() < 0.9) continue;
+        const double az = 2.0 * kPi * k / kDirs;
+        const double dist = h.range * std::abs(Vector3d(std::cos(az), std::sin(az), 0.0).dot(n.normalized()));
+        if (dist < nearest) {
+          nearest = dist;  // distance to the wall plane
           wall_normal = n.normalized();
-          nearest = h.range * std::abs(d.dot(wall_normal));  // distance to the wall plane
         }
       }
       if (!(nearest < 3.0)) continue;
@@ -279,6 +291,26 @@ World::World(const bim::BimMesh& mesh, const WorldSettings& settings)
         const Vector3d local(((i % 3) - 1) * 0.95 * box.half_size.x(), ((i / 3) - 1) * 0.95 * box.half_size.y(), 0.0);
         ok = column_clear(foot + R * local, kind.height + 0.05);
       }
+      // Nothing crosses the footprint: from the centre (free space) towards its corners and edge
+      // midpoints, near the floor and near the top.
+      for (int i = 0; i < 9 && ok; ++i) {
+        if (i == 4) continue;
+        const Vector3d local(((i % 3) - 1) * 0.98 * box.half_size.x(), ((i / 3) - 1) * 0.98 * box.half_size.y(), 0.0);
+        const Vector3d w = R * local;
+        for (double h : {0.1, kind.height - 0.05}) {
+          if (bim_caster.occluded(foot + Vector3d(0, 0, h), w.normalized(), w.norm())) {
+            ok = false;
+            break;
+          }
+        }
+      }
+      // Its back really stands against the wall (not against a far plane seen through a gap).
+      for (double along : {-0.9, 0.0, 0.9}) {
+        if (!ok) break;
+        const Vector3d back = foot + R * Vector3d(along * box.half_size.x(), 0.0, 0.0) + Vector3d(0, 0, 0.4);
+        const RayHit h = bim_caster.cast(back, -wall_normal, box.half_size.y() + 0.15);
+        ok = h.hit();
+      }
       if (!ok) continue;
       const Vector3d front = box.center + wall_normal * box.half_size.y();
       if (bim_caster.occluded(Vector3d(front.x(), front.y(), foot.z() + 0.3), wall_normal, 1.0)) continue;
@@ -295,6 +327,15 @@ World::World(const bim::BimMesh& mesh, const WorldSettings& settings)
     }
 
     // People: straight free walks of 2..8 m.
+    auto blocked_by_clutter = [&](const Vector3d& q) {
+      for (const ClutterBox& box : clutter_) {
+        if ((box.center - q).head<2>().norm() < footprint_radius(box) + s.person_radius + 0.1 &&
+            std::abs(box.center.z() - box.half_size.z() - q.z()) < 1.0) {
+          return true;
+        }
+      }
+      return false;
+    };
     for (int person = 0, attempt = 0; person < s.num_people && attempt < 400 * s.num_people; ++attempt) {
       Vector3d p;
       if (!sample_floor(p)) continue;
@@ -311,18 +352,21 @@ World::World(const bim::BimMesh& mesh, const WorldSettings& settings)
           }
         }
         reach[dir] = std::max(0.0, std::min(4.0, reach[dir] - s.person_radius - 0.3));
+        // Stop short of the first furniture box in the way.
+        for (double step = 0.0; step <= reach[dir]; step += 0.05) {
+          if (blocked_by_clutter(p + u * step)) {
+            reach[dir] = step - 0.05;
+            break;
+          }
+        }
       }
+      if (reach[0] < 0.0 || reach[1] < 0.0) continue;
       const Vector3d a = p + d * reach[0], b = p - d * reach[1];
       if ((a - b).norm() < 2.0) continue;
       bool ok = !near_door(a, s.person_radius) && !near_door(b, s.person_radius);
       for (int k = 0; k <= 8 && ok; ++k) {  // level floor and head room along the walk
         const Vector3d q = a + (b - a) * (k / 8.0);
         ok = column_clear(q, s.person_height + 0.05);
-      }
-      for (const ClutterBox& box : clutter_) {
-        if (!ok) break;
-        ok = segment_distance_xy(box.center, a, b) > footprint_radius(box) + s.person_radius + 0.1 ||
-             std::abs(box.center.z() - a.z()) > 2.5;
       }
       if (!ok) continue;
       Person walker;
@@ -366,7 +410,7 @@ RayHit World::cast(const Vector3d& origin, const Vector3d& unit_dir, double t_ma
     const double z0 = f.z(), z1 = f.z() + person.height;
     const double px = origin.x() - f.x(), py = origin.y() - f.y();
     const double c = px * px + py * py - r * r;
-    if (c <= 0.0) continue;  // the origin stands inside this person: ignore them
+    if (c <= 0.0 && origin.z() >= z0 && origin.z() <= z1) continue;  // origin inside them: ignore them
     const double a = unit_dir.x() * unit_dir.x() + unit_dir.y() * unit_dir.y();
     const double b = px * unit_dir.x() + py * unit_dir.y();
     double t_hit = kInf;
