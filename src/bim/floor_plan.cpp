@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <utility>
 
 #include "plumb/core/error.hpp"
 
@@ -84,6 +86,51 @@ bool is_ignored(const BimMesh& mesh, std::int32_t element, const std::vector<std
   return std::find(ignored.begin(), ignored.end(), type) != ignored.end();
 }
 
+/// Marks the cells whose centre lies inside the closed surface of one element at height z
+/// (even-odd rule on the element's cross-section, row by row). Rows with an odd number of
+/// crossings (an open surface) are left alone.
+template <class Mark>
+void fill_cross_section(const OccupancyGrid& g, const BimMesh& mesh, const BimElement& e, double z,
+                        std::vector<std::pair<Vector2d, Vector2d>>& segments, std::vector<double>& xs, Mark&& mark) {
+  segments.clear();
+  const std::size_t end = std::min(e.first_triangle + e.num_triangles, mesh.triangles.size());
+  for (std::size_t t = e.first_triangle; t < end; ++t) {
+    const auto& tri = mesh.triangles[t];
+    Vector2d pts[2];
+    int n = 0;
+    for (int k = 0; k < 3 && n < 2; ++k) {
+      const Vector3d& a = mesh.vertices[tri[static_cast<std::size_t>(k)]];
+      const Vector3d& b = mesh.vertices[tri[static_cast<std::size_t>((k + 1) % 3)]];
+      if ((a.z() >= z) == (b.z() >= z)) continue;
+      const double f = (z - a.z()) / (b.z() - a.z());
+      pts[n++] = (a + f * (b - a)).head<2>();
+    }
+    if (n == 2) segments.emplace_back(pts[0], pts[1]);
+  }
+  if (segments.size() < 2) return;
+  double y_lo = std::numeric_limits<double>::infinity(), y_hi = -y_lo;
+  for (const auto& [p, q] : segments) {
+    y_lo = std::min({y_lo, p.y(), q.y()});
+    y_hi = std::max({y_hi, p.y(), q.y()});
+  }
+  const int iy0 = std::max(0, g.cell_of({0.0, y_lo}).y()), iy1 = std::min(g.height - 1, g.cell_of({0.0, y_hi}).y());
+  for (int iy = iy0; iy <= iy1; ++iy) {
+    const double y = g.center(0, iy).y();
+    xs.clear();
+    for (const auto& [p, q] : segments) {
+      if ((p.y() > y) == (q.y() > y)) continue;
+      xs.push_back(p.x() + (y - p.y()) / (q.y() - p.y()) * (q.x() - p.x()));
+    }
+    if (xs.size() % 2 != 0) continue;
+    std::sort(xs.begin(), xs.end());
+    for (std::size_t k = 0; k + 1 < xs.size(); k += 2) {
+      const int ix0 = std::max(0, static_cast<int>(std::ceil((xs[k] - g.origin.x()) / g.resolution - 0.5)));
+      const int ix1 = std::min(g.width - 1, static_cast<int>(std::floor((xs[k + 1] - g.origin.x()) / g.resolution - 0.5)));
+      for (int ix = ix0; ix <= ix1; ++ix) mark(g.index(ix, iy));
+    }
+  }
+}
+
 OccupancyGrid slice_storey(const BimMesh& mesh, int storey, const FloorPlanSettings& s) {
   Vector3d lo, hi;
   mesh.bounds(lo, hi);
@@ -126,6 +173,17 @@ OccupancyGrid slice_storey(const BimMesh& mesh, int storey, const FloorPlanSetti
     for (std::size_t k = 1; k + 1 < poly.size(); ++k) {
       rasterize_triangle(g, poly[0].head<2>(), poly[k].head<2>(), poly[k + 1].head<2>(), true,
                          [&](std::size_t i) { occupied[i] = 1; });
+    }
+  }
+  // Inside of closed elements (thick walls, columns) crossing the slice: their faces in the slice
+  // only outline them.
+  std::vector<std::pair<Vector2d, Vector2d>> segments;
+  std::vector<double> xs;
+  for (std::size_t e = 0; e < mesh.elements.size(); ++e) {
+    const BimElement& el = mesh.elements[e];
+    if (el.num_triangles == 0 || is_ignored(mesh, static_cast<std::int32_t>(e), s.ignored_types)) continue;
+    for (double z : {slice_lo + 0.01, 0.5 * (slice_lo + slice_hi), slice_hi - 0.01}) {
+      fill_cross_section(g, mesh, el, z, segments, xs, [&](std::size_t i) { occupied[i] = 1; });
     }
   }
   g.cells.resize(floor.size());

@@ -1,0 +1,171 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "plumb/bim/floor_plan.hpp"
+
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "plumb/bim/ifc.hpp"
+#include "plumb/core/error.hpp"
+#include "plumb/sim/route.hpp"
+#include "test_data.hpp"
+
+namespace plumb::bim {
+namespace {
+
+/// Appends an axis-aligned box as one element (12 triangles).
+void add_box(BimMesh& mesh, const Vector3d& lo, const Vector3d& hi, const std::string& type, int storey = 0) {
+  BimElement e;
+  e.type = type;
+  e.storey = storey;
+  e.first_triangle = mesh.triangles.size();
+  e.num_triangles = 12;
+  e.bbox_min = lo;
+  e.bbox_max = hi;
+  e.has_body = true;
+  const auto base = static_cast<std::uint32_t>(mesh.vertices.size());
+  for (int k = 0; k < 8; ++k) {
+    mesh.vertices.emplace_back((k & 1) ? hi.x() : lo.x(), (k & 2) ? hi.y() : lo.y(), (k & 4) ? hi.z() : lo.z());
+  }
+  const std::uint32_t faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& f : faces) {
+    mesh.triangles.push_back({base + f[0], base + f[1], base + f[2]});
+    mesh.triangles.push_back({base + f[0], base + f[2], base + f[3]});
+  }
+  const auto index = static_cast<std::int32_t>(mesh.elements.size());
+  mesh.triangle_element.insert(mesh.triangle_element.end(), 12, index);
+  mesh.elements.push_back(e);
+}
+
+/// 12 m x 8 m floor, 0.2 m walls 2.8 m high, three rooms joined by two doorways holding IfcDoor leaves.
+BimMesh three_rooms(bool with_floor = true) {
+  BimMesh m;
+  m.storeys.push_back({1, "Ground", 0.0});
+  if (with_floor) add_box(m, {0, 0, -0.2}, {12, 8, 0}, "IfcSlab");
+  add_box(m, {0, 0, 0}, {12, 0.2, 2.8}, "IfcWallStandardCase");
+  add_box(m, {0, 7.8, 0}, {12, 8, 2.8}, "IfcWallStandardCase");
+  add_box(m, {0, 0, 0}, {0.2, 8, 2.8}, "IfcWallStandardCase");
+  add_box(m, {11.8, 0, 0}, {12, 8, 2.8}, "IfcWallStandardCase");
+  // x = 6 wall with a doorway y in [3, 4]
+  add_box(m, {5.9, 0, 0}, {6.1, 3, 2.8}, "IfcWallStandardCase");
+  add_box(m, {5.9, 4, 0}, {6.1, 8, 2.8}, "IfcWallStandardCase");
+  add_box(m, {5.9, 3, 2.1}, {6.1, 4, 2.8}, "IfcWallStandardCase");  // lintel above the door
+  add_box(m, {5.98, 3, 0}, {6.02, 4, 2.1}, "IfcDoor");
+  // y = 4 wall in the right half with a doorway x in [8.5, 9.5]
+  add_box(m, {6, 3.9, 0}, {8.5, 4.1, 2.8}, "IfcWall");
+  add_box(m, {9.5, 3.9, 0}, {12, 4.1, 2.8}, "IfcWall");
+  add_box(m, {8.5, 3.98, 0}, {9.5, 4.02, 2.1}, "IfcDoor");
+  // a table in the left room: its top (0.72..0.75) is in the slice, so it blocks
+  add_box(m, {2, 5, 0.72}, {3, 6, 0.75}, "IfcFurnishingElement");
+  return m;
+}
+
+TEST(FloorPlanTest, SliceOfThreeRooms) {
+  const BimMesh mesh = three_rooms();
+  FloorPlanSettings s;
+  s.resolution = 0.05;
+  const OccupancyGrid g = floor_plan(mesh, s);
+  EXPECT_EQ(g.storey, 0);
+  EXPECT_EQ(g.floor_z, 0.0);
+  EXPECT_TRUE(g.is_free({3.0, 2.0}));      // left room
+  EXPECT_TRUE(g.is_free({9.0, 2.0}));      // lower right room
+  EXPECT_TRUE(g.is_free({9.0, 6.0}));      // upper right room
+  EXPECT_TRUE(g.is_free({6.0, 3.5}));      // doorway, door open
+  EXPECT_TRUE(g.is_free({9.0, 4.0}));      // doorway
+  EXPECT_FALSE(g.is_free({6.0, 1.5}));     // wall
+  EXPECT_FALSE(g.is_free({0.1, 4.0}));     // outer wall
+  EXPECT_FALSE(g.is_free({2.5, 5.5}));     // under the table top
+  const Eigen::Vector2i wall = g.cell_of({6.0, 6.0});
+  EXPECT_EQ(g.at(wall.x(), wall.y()), CellState::kOccupied);
+  const Eigen::Vector2i out = g.cell_of({-0.5, 4.0});
+  EXPECT_EQ(g.at(out.x(), out.y()), CellState::kOutside);
+  EXPECT_EQ(g.at(-1, 0), CellState::kOutside);
+  // Free area: the inner 11.6 x 7.6 m minus the interior walls and the table (+ the two doorways),
+  // give or take one cell along every wall face.
+  const double expected = 11.6 * 7.6 - 0.2 * 7.6 - 0.2 * 5.7 - 1.0 + 2 * 0.2;
+  const double boundary = (2 * 11.6 + 2 * 7.6 + 2 * 7.6 + 2 * 5.7 + 4.0) * s.resolution;
+  EXPECT_NEAR(g.free_area(), expected, boundary);
+}
+
+TEST(FloorPlanTest, DoorsAreOpenOnlyWhenIgnored) {
+  const BimMesh mesh = three_rooms();
+  FloorPlanSettings s;
+  const OccupancyGrid open = floor_plan(mesh, s);
+  const std::vector<float> clr_open = sim::clearance_map(open);
+  sim::RouteSettings rs;
+  rs.min_clearance = 0.3;
+  EXPECT_FALSE(sim::plan_path(open, clr_open, {3, 2}, {9, 6}, rs).empty());
+  s.ignored_types = {"IfcSpace"};  // doors now block
+  const OccupancyGrid closed = floor_plan(mesh, s);
+  EXPECT_FALSE(closed.is_free({6.0, 3.5}));
+  EXPECT_TRUE(sim::plan_path(closed, sim::clearance_map(closed), {3, 2}, {9, 6}, rs).empty());
+}
+
+TEST(FloorPlanTest, NoWalkableStoreyIsAClearError) {
+  const BimMesh no_floor = three_rooms(false);
+  try {
+    floor_plan(no_floor);
+    FAIL() << "expected plumb::Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no walkable storey"), std::string::npos) << e.what();
+  }
+  BimMesh no_storey = three_rooms();
+  no_storey.storeys.clear();
+  EXPECT_THROW(floor_plan(no_storey), Error);
+  FloorPlanSettings s;
+  s.storey = 3;
+  EXPECT_THROW(floor_plan(three_rooms(), s), Error);
+  // A storey placed 5 m above the only floor has no floor of its own.
+  BimMesh two = three_rooms();
+  two.storeys.push_back({2, "Roof", 5.0});
+  s.storey = 1;
+  try {
+    floor_plan(two, s);
+    FAIL() << "expected plumb::Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("'Roof'"), std::string::npos) << e.what();
+  }
+  s.storey = -1;
+  EXPECT_EQ(floor_plan(two, s).storey, 0);
+  const std::vector<double> areas = storey_free_areas(two);
+  ASSERT_EQ(areas.size(), 2u);
+  EXPECT_GT(areas[0], 60.0);
+  EXPECT_EQ(areas[1], 0.0);
+  s.resolution = 0.0;
+  EXPECT_THROW(floor_plan(two, s), Error);
+}
+
+TEST(FloorPlanTest, FzkHausFreeSpaceLiesInsideItsSpaces) {
+  PLUMB_REQUIRE_DATA(path, "ifc/buildings/AC20-FZK-Haus.ifc");
+  BimMeshSettings ms;
+  ms.include_spaces = true;
+  const BimMesh mesh = build_mesh(read_ifc(path), ms);
+  const OccupancyGrid g = floor_plan(mesh);
+  ASSERT_GE(g.storey, 0);
+  // Independent reference: the IfcSpace volumes of that storey, which the architect drew as the
+  // rooms. (Spaces are ignored by the slice.) Nearly every free cell must lie in a space footprint.
+  std::vector<std::pair<Vector3d, Vector3d>> spaces;
+  for (const BimElement& e : mesh.elements) {
+    if (e.type == "IfcSpace" && e.storey == g.storey) spaces.emplace_back(e.bbox_min, e.bbox_max);
+  }
+  ASSERT_FALSE(spaces.empty());
+  std::size_t free = 0, in_space = 0;
+  for (int iy = 0; iy < g.height; ++iy) {
+    for (int ix = 0; ix < g.width; ++ix) {
+      if (g.at(ix, iy) != CellState::kFree) continue;
+      ++free;
+      const Vector2d c = g.center(ix, iy);
+      for (const auto& [lo, hi] : spaces) {
+        if (c.x() >= lo.x() && c.x() <= hi.x() && c.y() >= lo.y() && c.y() <= hi.y()) {
+          ++in_space;
+          break;
+        }
+      }
+    }
+  }
+  EXPECT_GT(g.free_area(), 30.0);
+  EXPECT_GT(static_cast<double>(in_space), 0.9 * static_cast<double>(free)) << in_space << " of " << free;
+}
+
+}  // namespace
+}  // namespace plumb::bim
