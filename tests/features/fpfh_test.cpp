@@ -143,6 +143,30 @@ TEST(FpfhTest, HandComputedPair) {
   }
 }
 
+TEST(FpfhTest, AngleBinMatchesAtan2) {
+  // bin = floor(11 (atan2(y, x) + pi) / 2 pi), clamped, as Open3D computes it (in double)
+  auto ref = [](double y, double x) {
+    const int b = static_cast<int>(std::floor(11.0 * (std::atan2(y, x) + M_PI) / (2.0 * M_PI)));
+    return std::min(std::max(b, 0), 10);
+  };
+  EXPECT_EQ(detail::fpfh_angle_bin(0.0f, 0.0f), 5);
+  EXPECT_EQ(detail::fpfh_angle_bin(0.0f, 1.0f), 5);
+  EXPECT_EQ(detail::fpfh_angle_bin(0.0f, -1.0f), 10);  // atan2(+0, -1) = pi
+  EXPECT_EQ(detail::fpfh_angle_bin(1.0f, 0.0f), 8);
+  EXPECT_EQ(detail::fpfh_angle_bin(-1.0f, 0.0f), 2);
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int checked = 0;
+  for (int t = 0; t < 200000; ++t) {
+    const float y = static_cast<float>(u(rng)), x = static_cast<float>(u(rng));
+    const double edge = 11.0 * (std::atan2(double(y), double(x)) + M_PI) / (2.0 * M_PI);
+    if (std::fabs(edge - std::round(edge)) < 1e-5) continue;  // on a bin edge: either is right
+    ASSERT_EQ(detail::fpfh_angle_bin(y, x), ref(y, x)) << "y " << y << " x " << x;
+    ++checked;
+  }
+  EXPECT_GT(checked, 199000);
+}
+
 TEST(FpfhTest, RotationInvariantOnRealCloud) {
   PLUMB_REQUIRE_DATA(path, "cloud3d/pcl_test/bunny.pcd");
   const PointCloud cloud = bunny_with_golden_normals();

@@ -20,25 +20,43 @@ inline int fpfh_cos_bin(float f) {
   return std::min(std::max(b, 0), kFpfhBinsPerFeature - 1);
 }
 
-/// Bin of the α feature, an angle in [-π, π]: floor(11 (f + π) / 2π), clamped.
-inline int fpfh_angle_bin(float f) {
-  constexpr float kPi = 3.14159265358979323846f;
-  int b = static_cast<int>(
-      std::floor(static_cast<float>(kFpfhBinsPerFeature) * (f + kPi) / (2.0f * kPi)));
-  return std::min(std::max(b, 0), kFpfhBinsPerFeature - 1);
+/// Bin of the α feature α = atan2(y, x) in [-π, π], floor(11 (α + π) / 2π), without atan2: the
+/// bin is the number of bin edges β_k = -π + 2πk/11 (k = 1..10) with α >= β_k. Edges below 0 are
+/// all passed when y >= 0 and the rest none when y < 0; within a half plane α >= β_k is the sign
+/// of the cross product (cos β_k, sin β_k) x (x, y). (x, y) = (0, 0), α = 0, is the middle bin.
+inline int fpfh_angle_bin(float y, float x) {
+  // cos / sin of β_k for k = 1..10 (float of the double values)
+  static constexpr float kCos[10] = {-0.841253532831181f, -0.415415013001886f, 0.142314838273285f,
+                                     0.654860733945285f,  0.959492973614497f,  0.959492973614497f,
+                                     0.654860733945285f,  0.142314838273285f,  -0.415415013001886f,
+                                     -0.841253532831181f};
+  static constexpr float kSin[10] = {-0.540640817455598f, -0.909631995354518f, -0.989821441880933f,
+                                     -0.755749574354258f, -0.281732556841430f, 0.281732556841430f,
+                                     0.755749574354258f,  0.989821441880933f,  0.909631995354518f,
+                                     0.540640817455598f};
+  if (x == 0.0f && y == 0.0f) return kFpfhBinsPerFeature / 2;
+  const int half = y >= 0.0f ? 5 : 0;
+  int bin = half;
+  for (int k = 0; k < 5; ++k) {
+    bin += (y * kCos[half + k] - x * kSin[half + k] >= 0.0f) ? 1 : 0;
+  }
+  return bin;
 }
 
 /// Bins (α, φ, θ) of the pair features of (p1, n1) and (p2, n2), Rusu 2009 / PCL / Open3D
 /// `ComputePairFeatures`: the pair's source is the point whose normal is closer to the connecting
 /// line; u = source normal, v = unit(d × u), w = u × v, α = atan2(w·n_t, u·n_t), φ = v·n_t,
 /// θ = u·d/|d|. Degenerate pairs (coincident points, d parallel to u) give features (0, 0, 0).
-inline void fpfh_pair_bins(const Vector3f& p1, const Vector3f& n1, const Vector3f& p2,
+/// @return false when the two normals make exactly equal angles with the line: then the source is
+///         p1 here but p2 for the reversed pair, whose features differ. Otherwise the reversed
+///         pair (p2, n2, p1, n1) has bit-identical features (every operation is mirrored exactly).
+inline bool fpfh_pair_bins(const Vector3f& p1, const Vector3f& n1, const Vector3f& p2,
                            const Vector3f& n2, int bins[3]) {
   Vector3f d = p2 - p1;
   const float len = d.norm();
   // Features (0, 0, 0) fall in the middle bin of each sub-histogram.
   bins[0] = bins[1] = bins[2] = kFpfhBinsPerFeature / 2;
-  if (len == 0.0f) return;
+  if (len == 0.0f) return true;
   const float a1 = n1.dot(d) / len;
   const float a2 = n2.dot(d) / len;
   const Vector3f* u = &n1;
@@ -52,16 +70,16 @@ inline void fpfh_pair_bins(const Vector3f& p1, const Vector3f& n1, const Vector3
     d = -d;
     theta = -a2;
   }
+  const bool symmetric = std::fabs(a1) != std::fabs(a2);
   Vector3f v = d.cross(*u);
   const float v_norm = v.norm();
-  if (v_norm == 0.0f) return;
+  if (v_norm == 0.0f) return symmetric;
   v /= v_norm;
   const Vector3f w = u->cross(v);
-  const float phi = v.dot(*nt);
-  const float alpha = std::atan2(w.dot(*nt), u->dot(*nt));
-  bins[0] = fpfh_angle_bin(alpha);
-  bins[1] = fpfh_cos_bin(phi);
+  bins[0] = fpfh_angle_bin(w.dot(*nt), u->dot(*nt));
+  bins[1] = fpfh_cos_bin(v.dot(*nt));
   bins[2] = fpfh_cos_bin(theta);
+  return symmetric;
 }
 
 /// Neighbour lists in compressed rows: row r holds entries [begin[r], begin[r + 1]).
@@ -115,7 +133,8 @@ inline FpfhResult compute_fpfh(const PointCloud& cloud, const FpfhSettings& sett
 
   constexpr std::uint32_t kNoRow = std::numeric_limits<std::uint32_t>::max();
   std::vector<std::uint32_t> row_of(n, kNoRow);
-  std::vector<std::uint32_t> row_point;  // cloud index of each row
+  std::vector<std::uint32_t> row_point;   // cloud index of each row
+  std::vector<std::uint8_t> row_capped;   // 1: the cap dropped neighbours within the radius
   detail::FpfhNeighborRows rows;
   std::vector<std::size_t> found_idx;
   std::vector<float> found_d2;
@@ -140,11 +159,12 @@ inline FpfhResult compute_fpfh(const PointCloud& cloud, const FpfhSettings& sett
       cand.emplace_back(found_d2[j], static_cast<std::uint32_t>(q));
     }
     // With the point itself counted, `cap` entries leave cap - 1 neighbours.
-    const std::size_t keep = (cap == 0) ? cand.size() : std::min(cand.size(), cap - (self_found ? 1 : 0));
+    const std::size_t keep =
+        (cap == 0) ? cand.size() : std::min(cand.size(), cap - (self_found ? 1 : 0));
+    row_capped.push_back(keep < cand.size() ? 1 : 0);
     if (keep < cand.size()) {
       std::nth_element(cand.begin(), cand.begin() + static_cast<std::ptrdiff_t>(keep), cand.end());
       cand.resize(keep);
-      std::sort(cand.begin(), cand.end());
     }
     for (const auto& c : cand) {
       rows.index.push_back(c.second);
@@ -164,25 +184,40 @@ inline FpfhResult compute_fpfh(const PointCloud& cloud, const FpfhSettings& sett
     }
   }
 
-  // SPFH per row (Rusu 2009 eq. for the simplified PFH), each sub-histogram normalised to 100.
+  // SPFH per row (Rusu 2009), each sub-histogram normalised to 100: every neighbour adds
+  // 100 / (number of neighbours) to one bin of each feature.
   const std::size_t num_rows = row_point.size();
-  std::vector<float> spfh(num_rows * kFpfhBins, 0.0f);
+  std::vector<float> incr(num_rows, 0.0f);
   for (std::size_t r = 0; r < num_rows; ++r) {
-    const std::uint32_t b = rows.begin[r];
-    const std::uint32_t e = rows.begin[r + 1];
-    if (b == e) continue;
+    const std::uint32_t count = rows.begin[r + 1] - rows.begin[r];
+    if (count > 0) incr[r] = 100.0f / static_cast<float>(count);
+  }
+  std::vector<float> spfh(num_rows * kFpfhBins, 0.0f);
+  auto add_bins = [&spfh, &incr](std::size_t r, const int bins[3]) {
+    float* h = &spfh[r * kFpfhBins];
+    const float inc = incr[r];
+    h[bins[0]] += inc;
+    h[kFpfhBinsPerFeature + bins[1]] += inc;
+    h[2 * kFpfhBinsPerFeature + bins[2]] += inc;
+  };
+  for (std::size_t r = 0; r < num_rows; ++r) {
     const std::size_t p = row_point[r];
     const Vector3f& pp = cloud.points[p];
     const Vector3f& np = cloud.normals[p];
-    const float incr = 100.0f / static_cast<float>(e - b);
-    float* h = &spfh[r * kFpfhBins];
-    for (std::uint32_t k = b; k < e; ++k) {
+    for (std::uint32_t k = rows.begin[r]; k < rows.begin[r + 1]; ++k) {
       const std::uint32_t q = rows.index[k];
+      const std::uint32_t rq = row_of[q];
+      // Radius neighbourhoods are symmetric: when neither row was capped, q's row holds p, and
+      // the pair's features are computed once (at the smaller index) for both rows. A bin is a
+      // sum of equal increments, so the order of the additions does not change the result.
+      const bool both = rq != kNoRow && !row_capped[r] && !row_capped[rq];
+      if (both && q < p) continue;
       int bins[3];
-      detail::fpfh_pair_bins(pp, np, cloud.points[q], cloud.normals[q], bins);
-      h[bins[0]] += incr;
-      h[kFpfhBinsPerFeature + bins[1]] += incr;
-      h[2 * kFpfhBinsPerFeature + bins[2]] += incr;
+      const bool mirrored = detail::fpfh_pair_bins(pp, np, cloud.points[q], cloud.normals[q], bins);
+      add_bins(r, bins);
+      if (!both) continue;
+      if (!mirrored) detail::fpfh_pair_bins(cloud.points[q], cloud.normals[q], pp, np, bins);
+      add_bins(rq, bins);
     }
   }
 
