@@ -16,4 +16,6 @@ model="$root/examples/data/demo_office.ifc"
 "$plumb" make-demo-building -o "$model"
 WEBIFC_DIR="${WEBIFC_DIR:-/tmp/webifc}" node "$root/scripts/ifc_golden/webifc_bbox.cjs" "$model" \
   "$root/tests/bim/golden/demo_office_webifc_bbox.json"
-echo "wrote $model and tests/bim/golden/demo_office_webifc_bbox.json"
+WEBIFC_DIR="${WEBIFC_DIR:-/tmp/webifc}" node "$root/scripts/ifc_golden/webifc_area.cjs" "$model" \
+  "$root/tests/bim/golden/demo_office_webifc_area.json"
+echo "wrote $model and tests/bim/golden/demo_office_webifc_{bbox,area}.json"

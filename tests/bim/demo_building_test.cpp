@@ -330,6 +330,54 @@ TEST(DemoBuildingTest, BoxesMatchWebIfc) {
   }
 }
 
+double element_area(const BimMesh& mesh, const BimElement& e) {
+  double a = 0.0;
+  for (std::size_t t = e.first_triangle; t < e.first_triangle + e.num_triangles; ++t) {
+    const Vector3d& p = mesh.vertices[mesh.triangles[t][0]];
+    a += 0.5 * (mesh.vertices[mesh.triangles[t][1]] - p).cross(mesh.vertices[mesh.triangles[t][2]] - p).norm();
+  }
+  return a;
+}
+
+TEST(DemoBuildingTest, SurfaceAreasMatchWebIfc) {
+  // Golden made by scripts/ifc_golden/webifc_area.cjs. Elements without openings must match
+  // exactly. A wall with openings: web-ifc's boolean difference adds the reveal faces inside each
+  // opening (perimeter x wall thickness) that build_mesh, which clips the wall's own faces, does not
+  // add; the difference must stay within those reveals (an opening not cut at all would leave the
+  // wall larger than web-ifc's by its two face areas, which is more).
+  const std::string golden_path = std::string(PLUMB_SOURCE_DIR) + "/tests/bim/golden/demo_office_webifc_area.json";
+  std::ifstream in(golden_path);
+  ASSERT_TRUE(in.good()) << golden_path;
+  const nlohmann::json golden = nlohmann::json::parse(in);
+  const IfcModel model = read_ifc(std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc");
+  const BimMesh mesh = build_mesh(model);
+  const StepFile& f = model.step;
+  std::map<std::uint32_t, double> reveal;  // wall id -> reveal area of its openings
+  std::map<std::uint32_t, std::uint32_t> wall_of;
+  for (std::uint32_t r : f.ids_of_type("IFCRELVOIDSELEMENT")) wall_of[f.args(r)[5].ref] = f.args(r)[4].ref;
+  for (std::uint32_t r : f.ids_of_type("IFCRELFILLSELEMENT")) {
+    const std::uint32_t wall_id = wall_of.at(f.args(r)[4].ref);
+    const BimElement& fill = element(mesh, f.args(r)[5].ref);
+    const BimElement& wall = element(mesh, wall_id);
+    const Vector3d wext = wall.bbox_max - wall.bbox_min, fext = fill.bbox_max - fill.bbox_min;
+    const double thickness = std::min(wext.x(), wext.y());
+    const double width = std::max(fext.x(), fext.y());
+    const bool bottom = fill.bbox_min.z() > wall.bbox_min.z() + 1e-9;  // a door's opening has no sill face
+    reveal[wall_id] += (2.0 * fext.z() + width * (bottom ? 2.0 : 1.0)) * thickness;
+  }
+  EXPECT_EQ(reveal.size(), 6u);  // 4 exterior walls (windows, entrance) and the 2 corridor walls
+  std::size_t compared = 0;
+  for (const auto& [id_text, ref] : golden["elements"].items()) {
+    const auto id = static_cast<std::uint32_t>(std::stoul(id_text));
+    const BimElement& el = element(mesh, id);
+    const double ours = element_area(mesh, el), theirs = ref["area"].get<double>();
+    const double allowed = reveal.count(id) ? reveal[id] : 0.0;
+    EXPECT_LE(std::abs(ours - theirs), allowed + 1e-4) << el.name << ": plumb " << ours << " m^2, web-ifc " << theirs;
+    ++compared;
+  }
+  EXPECT_EQ(compared, mesh.elements.size());
+}
+
 TEST(DemoBuildingTest, BadSettingsThrow) {
   auto with = [](auto edit) {
     DemoBuildingSettings s;

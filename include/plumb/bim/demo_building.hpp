@@ -15,6 +15,10 @@
 /// IfcLocalPlacement chain (site -> building -> storey -> element -> opening -> filling). Doors
 /// and windows are IfcDoor / IfcWindow in IfcOpeningElement voids of their wall
 /// (IfcRelVoidsElement + IfcRelFillsElement); rooms and corridor are IfcSpace. Units are metres.
+///
+/// @note A door is modelled as a closed leaf (4 cm) and a window as a 6 cm pane, both in the
+///       middle of the wall's thickness; a simulator that wants doors open or windows transparent
+///       skips those element types (the openings in the walls are real voids).
 
 #include <cstddef>
 #include <cstdint>
