@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 #include <vector>
 
 #include "plumb/core/error.hpp"
@@ -34,6 +35,9 @@ struct FrameSampleSettings {
   float normal_radius = 1.0f;
   /// Normals are oriented toward this point [m]: the sensor, which is the origin of the frame.
   Vector3f viewpoint = Vector3f::Zero();
+  /// Normals only for sample points with z <= this [m] (the others get NaN); +inf = all.
+  /// extract_ground() on its own uses 0: the ground lies below the sensor, which halves the work.
+  float normal_max_z = std::numeric_limits<float>::infinity();
 };
 
 /// @brief A frame's sample: points, normals and where each came from.
@@ -56,6 +60,7 @@ inline FrameSample sample_frame(const PointCloud& cloud, const FrameSampleSettin
   PLUMB_CHECK(std::isfinite(settings.voxel_size) && settings.voxel_size > 0.0,
               "sample_frame: voxel_size = " << settings.voxel_size << " must be finite and > 0");
   PLUMB_CHECK(settings.normal_k >= 3, "sample_frame: normal_k = " << settings.normal_k << " must be >= 3");
+  PLUMB_CHECK(!std::isnan(settings.normal_max_z), "sample_frame: normal_max_z is NaN");
   cloud.check_consistent("sample_frame");
   FrameSample out;
   out.voxel_size = settings.voxel_size;
@@ -81,7 +86,21 @@ inline FrameSample sample_frame(const PointCloud& cloud, const FrameSampleSettin
       ns.radius = settings.normal_radius;
       ns.viewpoint = settings.viewpoint;
       ns.orient_to_viewpoint = true;
-      out.normals = estimate_normals(out.points, tree, out.points, ns).normals;
+      if (std::isinf(settings.normal_max_z) && settings.normal_max_z > 0.0f) {
+        out.normals = estimate_normals(out.points, tree, out.points, ns).normals;
+      } else {
+        std::vector<Vector3f> queries;
+        std::vector<std::size_t> where;
+        for (std::size_t i = 0; i < out.points.size(); ++i) {
+          if (out.points[i].z() <= settings.normal_max_z) {
+            queries.push_back(out.points[i]);
+            where.push_back(i);
+          }
+        }
+        out.normals.assign(out.points.size(), Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
+        const NormalResult nr = estimate_normals(queries, tree, out.points, ns);
+        for (std::size_t j = 0; j < where.size(); ++j) out.normals[where[j]] = nr.normals[j];
+      }
       out.status = Status::kOk;
     } else {
       out.points.clear();

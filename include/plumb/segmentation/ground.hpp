@@ -65,7 +65,8 @@ struct GroundResult {
 GroundResult extract_ground(const PointCloud& cloud, const FrameSample& sample,
                             const GroundSettings& settings = {});
 
-/// @brief Ground plane of `cloud`: sample_frame(cloud, settings.sample), then the overload above.
+/// @brief Ground plane of `cloud`: sample_frame(cloud, settings.sample) with normals only below
+///        the sensor (normal_max_z <= 0), then the overload above.
 /// @return the ground; status kInsufficientData for an empty / all-NaN / tiny frame (no throw)
 GroundResult extract_ground(const PointCloud& cloud, const GroundSettings& settings = {});
 

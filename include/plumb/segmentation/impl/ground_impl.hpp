@@ -192,7 +192,9 @@ inline GroundResult extract_ground(const PointCloud& cloud, const FrameSample& s
 inline GroundResult extract_ground(const PointCloud& cloud, const GroundSettings& settings) {
   const auto t0 = std::chrono::steady_clock::now();
   detail::check_ground_settings(settings);
-  const FrameSample sample = sample_frame(cloud, settings.sample);
+  FrameSampleSettings ss = settings.sample;
+  ss.normal_max_z = std::min(ss.normal_max_z, 0.0f);  // candidates lie below the sensor
+  const FrameSample sample = sample_frame(cloud, ss);
   GroundResult out = extract_ground(cloud, sample, settings);
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;
