@@ -1,0 +1,158 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "plumb/core/error.hpp"
+#include "plumb/features/normals.hpp"
+#include "plumb/filters/voxel_grid.hpp"
+
+namespace plumb {
+
+namespace detail {
+
+inline double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+inline void check_localize_settings(const LocalizeSettings& s) {
+  PLUMB_CHECK(std::isfinite(s.voxel_size) && s.voxel_size > 0.0,
+              "localize_coarse_to_fine: settings.voxel_size = " << s.voxel_size << " must be > 0");
+  PLUMB_CHECK(std::isfinite(s.fine_voxel_size) && s.fine_voxel_size >= 0.0,
+              "localize_coarse_to_fine: settings.fine_voxel_size = " << s.fine_voxel_size << " must be >= 0");
+  PLUMB_CHECK(s.normal_neighbors >= 3,
+              "localize_coarse_to_fine: settings.normal_neighbors = " << s.normal_neighbors << " must be >= 3");
+  for (double f : {s.normal_radius_factor, s.fpfh_radius_factor, s.huber_factor, s.correspondence_factor})
+    PLUMB_CHECK(std::isfinite(f) && f > 0.0, "localize_coarse_to_fine: a radius/distance factor is " << f << ", must be > 0");
+}
+
+/// Finite points of `cloud`, voxelised (leaf 0 = no voxel grid), with every field kept.
+inline PointCloud localize_downsample(const PointCloud& cloud, double leaf) {
+  PointCloud finite = cloud.select(cloud.finite_indices());
+  if (leaf <= 0.0 || finite.empty()) return finite;
+  VoxelGridSettings vs;
+  vs.leaf_size = leaf;
+  return voxel_grid(finite, vs).cloud;
+}
+
+inline std::size_t count_finite_normals(const PointCloud& c) {
+  std::size_t n = 0;
+  for (const Vector3f& v : c.normals) n += v.allFinite() ? 1 : 0;
+  return n;
+}
+
+/// Normals for a stage's cloud: kept when present and wanted, else PCA (hybrid k + radius).
+inline void localize_normals(PointCloud& c, const LocalizeSettings& s, double leaf, bool keep,
+                             const Vector3f& viewpoint) {
+  if (c.size() < 3) return;
+  if (keep && c.has_normals() && count_finite_normals(c) >= 3) return;
+  NormalSettings ns;
+  ns.k = s.normal_neighbors;
+  ns.radius = static_cast<float>(s.normal_radius_factor * std::max(leaf, s.voxel_size * 0.25));
+  ns.viewpoint = viewpoint;
+  compute_normals(c, ns);
+}
+
+inline std::vector<FpfhSignature> localize_fpfh(const PointCloud& c, const LocalizeSettings& s) {
+  if (c.size() < 3) return std::vector<FpfhSignature>(c.size(), FpfhSignature{});
+  FpfhSettings fs;
+  fs.radius = static_cast<float>(s.fpfh_radius_factor * s.voxel_size);
+  fs.max_neighbors = s.fpfh_max_neighbors;
+  return compute_fpfh(c, fs).features;
+}
+
+}  // namespace detail
+
+inline LocalizeTarget prepare_localize_target(const PointCloud& target, const LocalizeSettings& settings) {
+  detail::check_localize_settings(settings);
+  target.check_consistent("localize_coarse_to_fine: target");
+  const auto t0 = std::chrono::steady_clock::now();
+  LocalizeTarget out;
+  const Vector3f origin = Vector3f::Zero();
+  out.coarse = detail::localize_downsample(target, settings.voxel_size);
+  detail::localize_normals(out.coarse, settings, settings.voxel_size, settings.use_target_normals, origin);
+  out.features = detail::localize_fpfh(out.coarse, settings);
+  if (out.coarse.size() >= 3) out.coarse_tree = std::make_unique<KdTree3f>(out.coarse.points);
+  out.fine = detail::localize_downsample(target, settings.fine_voxel_size);
+  if (settings.icp.method == IcpMethod::kPointToPlane || out.fine.has_normals()) {
+    detail::localize_normals(out.fine, settings, settings.fine_voxel_size, settings.use_target_normals, origin);
+  }
+  if (out.fine.size() >= 3) out.fine_tree = std::make_unique<KdTree3f>(out.fine.points);
+  out.seconds = detail::seconds_since(t0);
+  return out;
+}
+
+inline LocalizeResult localize_coarse_to_fine(const PointCloud& source, const LocalizeTarget& target,
+                                              const LocalizeSettings& settings) {
+  detail::check_localize_settings(settings);
+  source.check_consistent("localize_coarse_to_fine: source");
+  LocalizeResult out;
+  auto t0 = std::chrono::steady_clock::now();
+  PointCloud coarse = detail::localize_downsample(source, settings.voxel_size);
+  coarse.normals.clear();  // a frame's own normals, if any, are re-estimated at this scale
+  detail::localize_normals(coarse, settings, settings.voxel_size, false, settings.source_viewpoint);
+  const std::vector<FpfhSignature> features = detail::localize_fpfh(coarse, settings);
+  out.num_source_coarse = coarse.size();
+  out.num_target_coarse = target.coarse.size();
+  out.seconds_prepare = detail::seconds_since(t0);
+  if (coarse.size() < settings.sac_ia.num_samples || !target.coarse_tree || !target.fine_tree) {
+    out.status = Status::kInsufficientData;
+    return out;
+  }
+
+  t0 = std::chrono::steady_clock::now();
+  SacIaSettings ss = settings.sac_ia;
+  ss.huber_threshold = settings.huber_factor * settings.voxel_size;
+  ss.max_correspondence_distance = std::max(ss.huber_threshold, settings.correspondence_factor * settings.voxel_size);
+  out.coarse = align_sac_ia(coarse, features, target.coarse, target.features, *target.coarse_tree, ss);
+  out.seconds_coarse = detail::seconds_since(t0);
+  if (out.coarse.status == Status::kInsufficientData) {
+    out.status = out.coarse.status;
+    return out;
+  }
+
+  t0 = std::chrono::steady_clock::now();
+  PointCloud fine = detail::localize_downsample(source, settings.fine_voxel_size);
+  fine.normals.clear();
+  if (target.fine.has_normals() && fine.size() >= 3) {  // for the normal-angle rejection
+    detail::localize_normals(fine, settings, settings.fine_voxel_size, false, settings.source_viewpoint);
+  }
+  out.fine = align_icp(fine, target.fine, *target.fine_tree, out.coarse.T_target_source, settings.icp);
+  if (settings.polish && out.fine.status != Status::kInsufficientData) {
+    IcpSettings ps = settings.icp;
+    ps.max_correspondence_distance = ps.min_correspondence_distance;
+    ps.max_rounds = 1;
+    ps.min_overlap = 0.0;
+    const IcpResult polished = align_icp(fine, target.fine, *target.fine_tree, out.fine.T_target_source, ps);
+    if (polished.status != Status::kInsufficientData && polished.status != Status::kDegenerate) {
+      out.fine.T_target_source = polished.T_target_source;
+      out.fine.iterations += polished.iterations;
+      out.fine.num_inliers = polished.num_inliers;
+      out.fine.rmse = polished.rmse;
+      out.fine.degeneracy = polished.degeneracy;
+      out.fine.overlap = overlap_ratio(fine, *target.fine_tree, polished.T_target_source, ps.overlap_distance).overlap;
+    }
+  }
+  out.seconds_fine = detail::seconds_since(t0);
+  out.T_target_source = out.fine.T_target_source;
+  out.status = out.fine.status;
+  out.converged = out.fine.converged;
+  out.iterations = out.fine.iterations;
+  out.num_inliers = out.fine.num_inliers;
+  out.overlap = out.fine.overlap;
+  out.rmse = out.fine.rmse;
+  out.degeneracy = out.fine.degeneracy;
+  return out;
+}
+
+inline LocalizeResult localize_coarse_to_fine(const PointCloud& source, const PointCloud& target,
+                                              const LocalizeSettings& settings) {
+  const LocalizeTarget prepared = prepare_localize_target(target, settings);
+  LocalizeResult r = localize_coarse_to_fine(source, prepared, settings);
+  r.seconds_prepare += prepared.seconds;
+  return r;
+}
+
+}  // namespace plumb

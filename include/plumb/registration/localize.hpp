@@ -1,0 +1,126 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+/// @file
+/// @brief The whole SEEDS A1 chain in one call: voxel grid -> normals -> FPFH -> SAC-IA (Huber)
+///        -> overlap-gated ICP. Finds a LiDAR frame in the BIM cloud without an initial guess.
+
+#include <cmath>
+#include <cstddef>
+#include <memory>
+
+#include <Eigen/Geometry>
+
+#include "plumb/core/error.hpp"
+#include "plumb/core/point_cloud.hpp"
+#include "plumb/core/status.hpp"
+#include "plumb/features/fpfh.hpp"
+#include "plumb/registration/icp.hpp"
+#include "plumb/registration/sac_ia.hpp"
+#include "plumb/search/kdtree.hpp"
+
+namespace plumb {
+
+/// @brief ICP settings of the fine stage of localize_coarse_to_fine() (point-to-plane, partial
+///        overlap accepted: a LiDAR frame sees clutter the BIM does not have).
+inline IcpSettings default_localize_icp_settings() {
+  IcpSettings s;
+  s.method = IcpMethod::kPointToPlane;
+  s.max_correspondence_distance = 0.6;
+  s.distance_step = 0.1;
+  s.min_correspondence_distance = 0.1;
+  s.min_overlap = 0.5;
+  s.overlap_distance = 0.1;
+  s.max_iterations = 30;
+  s.kernel = RobustKernel::kHuber;
+  s.kernel_scale = 0.1;
+  return s;
+}
+
+/// @brief Settings of localize_coarse_to_fine(). The coarse stage's lengths scale with `voxel_size`.
+struct LocalizeSettings {
+  double voxel_size = 0.3;              ///< voxel of the coarse stage (both clouds) [m], > 0
+  std::size_t normal_neighbors = 30;    ///< k of the PCA normals (hybrid with radius below), >= 3
+  double normal_radius_factor = 2.0;    ///< normal radius = factor * voxel_size
+  double fpfh_radius_factor = 5.0;      ///< FPFH radius = factor * voxel_size
+  std::size_t fpfh_max_neighbors = 100; ///< FPFH neighbourhood cap (0 = unlimited)
+  double huber_factor = 1.0;            ///< SAC-IA m1 = factor * voxel_size (replaces sac_ia.huber_threshold)
+  double correspondence_factor = 3.0;   ///< SAC-IA truncation = factor * voxel_size (replaces sac_ia.max_correspondence_distance)
+  /// SAC-IA; huber_threshold and max_correspondence_distance are replaced as above.
+  SacIaSettings sac_ia{};
+  /// Voxel of the fine stage for both clouds [m]; 0 = full resolution.
+  double fine_voxel_size = 0.1;
+  IcpSettings icp = default_localize_icp_settings();  ///< fine stage
+  /// After the gated ICP, one more ICP round at icp.min_correspondence_distance (no gate) so that
+  /// only close surface pairs shape the final estimate; the gate's status is kept.
+  bool polish = true;
+  /// Keep normals the target already has (a BIM cloud sampled from the model's faces); false
+  /// estimates them from the points like the source's.
+  bool use_target_normals = true;
+  /// Viewpoint of the source's normals, in the source frame (the sensor) [m].
+  Vector3f source_viewpoint = Vector3f::Zero();
+};
+
+/// @brief Settings with every length scaled to a coarse voxel size v [m] (the defaults are about
+///        v = 0.3 m): fine voxel v/3, SAC-IA sample distance 10v/3, ICP from 2v down to v/3,
+///        overlap distance and kernel scale v/3.
+/// @throws plumb::Error unless v is finite and > 0
+inline LocalizeSettings localize_settings_for_voxel(double v) {
+  PLUMB_CHECK(std::isfinite(v) && v > 0.0, "localize_settings_for_voxel: voxel size " << v << " must be > 0");
+  LocalizeSettings s;
+  s.voxel_size = v;
+  s.fine_voxel_size = v / 3.0;
+  s.sac_ia.min_sample_distance = v * 10.0 / 3.0;
+  s.icp.max_correspondence_distance = 2.0 * v;
+  s.icp.distance_step = v / 3.0;
+  s.icp.min_correspondence_distance = v / 3.0;
+  s.icp.overlap_distance = v / 3.0;
+  s.icp.kernel_scale = v / 3.0;
+  return s;
+}
+
+/// @brief The target side of localize_coarse_to_fine(), prepared once for many sources (the BIM
+///        cloud of a building): voxelised clouds, normals, FPFH and kd-trees.
+struct LocalizeTarget {
+  PointCloud coarse;                        ///< voxel_size cloud with normals
+  std::vector<FpfhSignature> features;      ///< FPFH of `coarse`, parallel to its points
+  std::unique_ptr<KdTree3f> coarse_tree;    ///< on coarse.points (null when too few points)
+  PointCloud fine;                          ///< fine_voxel_size cloud (normals when the ICP needs them)
+  std::unique_ptr<KdTree3f> fine_tree;      ///< on fine.points (null when too few points)
+  double seconds = 0.0;                     ///< preparation time [s]
+};
+
+/// @brief Result of localize_coarse_to_fine().
+struct LocalizeResult {
+  Eigen::Isometry3d T_target_source = Eigen::Isometry3d::Identity();  ///< fine estimate
+  Status status = Status::kInsufficientData;  ///< the fine stage's status, or the coarse one's if it failed
+  bool converged = false;          ///< fine stage met its stopping criterion
+  int iterations = 0;              ///< ICP iterations
+  std::size_t num_inliers = 0;     ///< ICP correspondences at the result
+  double overlap = 0.0;            ///< ICP overlap ratio at the result, [0, 1]
+  double rmse = 0.0;               ///< ICP RMS residual [m]
+  double degeneracy = 0.0;         ///< see IcpResult::degeneracy
+  SacIaResult coarse;              ///< the SAC-IA stage
+  IcpResult fine;                  ///< the ICP stage
+  std::size_t num_source_coarse = 0, num_target_coarse = 0;  ///< points in the coarse stage
+  double seconds_prepare = 0.0;    ///< voxel + normals + FPFH of the source (and target) [s]
+  double seconds_coarse = 0.0;     ///< SAC-IA [s]
+  double seconds_fine = 0.0;       ///< ICP [s]
+};
+
+/// @brief Prepare the target side once (see LocalizeTarget).
+/// @throws plumb::Error for bad settings or inconsistent cloud fields
+LocalizeTarget prepare_localize_target(const PointCloud& target, const LocalizeSettings& settings = {});
+
+/// @brief SEEDS A1 in one call against a prepared target; `source` is e.g. the first LiDAR frame.
+/// @note Deterministic for a given settings.sac_ia.seed. Empty / tiny / collinear sources return
+///       a status (kInsufficientData, kDegenerate...), never throw.
+LocalizeResult localize_coarse_to_fine(const PointCloud& source, const LocalizeTarget& target,
+                                       const LocalizeSettings& settings = {});
+
+/// @brief SEEDS A1 in one call: prepares the target, then localises the source in it.
+LocalizeResult localize_coarse_to_fine(const PointCloud& source, const PointCloud& target,
+                                       const LocalizeSettings& settings = {});
+
+}  // namespace plumb
+
+#include "plumb/registration/impl/localize_impl.hpp"

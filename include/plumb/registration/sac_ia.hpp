@@ -1,0 +1,72 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+/// @file
+/// @brief SAC-IA coarse registration with the Huber score (SEEDS A1.4, eq. 2; Rusu et al. 2009).
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "plumb/core/point_cloud.hpp"
+#include "plumb/core/status.hpp"
+#include "plumb/features/fpfh.hpp"
+#include "plumb/search/kdtree.hpp"
+
+namespace plumb {
+
+/// @brief Settings of align_sac_ia(). Lengths suit indoor scans voxelised to ~0.1-0.3 m; scale
+///        them with the voxel size (localize_coarse_to_fine() does).
+struct SacIaSettings {
+  std::size_t num_samples = 3;          ///< points per hypothesis (SEEDS A1.4a), >= 3
+  double min_sample_distance = 1.0;     ///< d: samples are pairwise farther apart than this [m]
+  std::size_t k_correspondences = 5;    ///< a sample's match is drawn among its k most similar target FPFH, >= 1
+  int max_iterations = 20000;           ///< hypotheses drawn at most, >= 1
+  double huber_threshold = 0.3;         ///< m1 of the Huber penalty (SEEDS eq. 2) [m]
+  /// m1 is also the largest residual a sample pair may keep under its own hypothesis (a cheap
+  /// check before scoring). Nearest distances are truncated at max_correspondence_distance in the
+  /// score (a point without a target neighbour this close costs H(max_correspondence_distance)) [m];
+  /// >= huber_threshold.
+  double max_correspondence_distance = 1.0;
+  /// Pre-rejection: every edge of the sampled polygon must satisfy min(|p_a p_b|, |q_a q_b|) /
+  /// max(...) >= this (rigid motions keep lengths). 0 disables it. In [0, 1).
+  double edge_similarity = 0.9;
+  /// Early termination: stop once the probability of having drawn an all-correct sample set,
+  /// estimated from the best hypothesis, reaches this. 1 runs all max_iterations. In (0, 1].
+  double confidence = 0.999;
+  std::uint64_t seed = 42;              ///< the only source of randomness
+};
+
+/// @brief Result of align_sac_ia().
+struct SacIaResult {
+  Eigen::Isometry3d T_target_source = Eigen::Isometry3d::Identity();  ///< best hypothesis (identity if none)
+  Status status = Status::kInsufficientData;  ///< kOk when terminated by confidence; kNotConverged at
+                                              ///< the iteration limit (the best hypothesis is still returned)
+  bool converged = false;       ///< early termination by confidence
+  int iterations = 0;           ///< hypotheses drawn
+  int num_scored = 0;           ///< hypotheses that passed pre-rejection and were scored
+  std::size_t num_inliers = 0;  ///< source points within huber_threshold of the target under the result
+  double overlap = 0.0;         ///< num_inliers / finite source points, [0, 1]
+  double rmse = 0.0;            ///< RMS nearest distance of the inliers [m]
+  double score = 0.0;           ///< sum of Huber penalties (SEEDS eq. 2) of the best hypothesis
+};
+
+/// @brief SAC-IA (SEEDS A1.4): draw samples farther apart than d, give each a random one of its k
+///        most similar target features, solve the transform in closed form (Horn), score it by the
+///        Huber penalty of every transformed source point's nearest-target distance, keep the best.
+///        Cheap pre-rejection (edge lengths) and an exact early exit of the score (a partial sum
+///        already above the best) make it fast without changing which hypothesis wins.
+/// @param source, target clouds; `*_features[i]` describes point i (compute_fpfh() on the whole
+///        cloud). All-zero (invalid) signatures and non-finite points are never sampled or matched.
+/// @param target_tree kd-tree on `target.points`
+/// @throws plumb::Error for mismatched sizes, a tree of another cloud or bad settings
+/// @note Deterministic for a given `settings.seed`; single thread. Cost: one feature kNN per
+///       source point, then O(iterations) cheap checks plus O(n log m) per scored hypothesis.
+SacIaResult align_sac_ia(const PointCloud& source, const std::vector<FpfhSignature>& source_features,
+                         const PointCloud& target, const std::vector<FpfhSignature>& target_features,
+                         const KdTree3f& target_tree, const SacIaSettings& settings = {});
+
+}  // namespace plumb
+
+#include "plumb/registration/impl/sac_ia_impl.hpp"
