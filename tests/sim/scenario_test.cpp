@@ -60,7 +60,7 @@ TEST(ScenarioTest, IndoorDumpIsConsistent) {
   const ScenarioSettings s = small_indoor(4.0);
   const ScenarioResult r = simulate_scenario(fzk_haus(), dir, s);
   EXPECT_GT(r.num_frames, 40u);
-  EXPECT_NEAR(r.path_length, 4.0, 0.3);
+  EXPECT_NEAR(r.path_length, 4.0, 0.6);  // 4 m along the route; corners are cut
 
   const io::FrameDumpReader dump(dir);
   ASSERT_EQ(dump.num_frames(), r.num_frames);
