@@ -5,7 +5,8 @@
 // Equal work: radius 0.5 m, at most 100 neighbours (plumb and Open3D: hybrid search; PCL has no
 // cap, which rarely matters here: a 0.5 m disc on a 0.1 m grid holds ~80 points). FPFH runs on the
 // same normals (plumb's, computed once) for all three. Every timed call builds its own kd-tree, as
-// each library does inside its feature call. Names: normals/<impl>/room_scan1, fpfh/<impl>/room_scan1.
+// each library does inside its feature call.
+// Names: normals/<impl>/room_scan1, fpfh/<impl>/room_scan1.
 
 #include <dlfcn.h>
 

@@ -121,8 +121,9 @@ PointCloud bunny_with_golden_normals() {
 
 TEST(FpfhTest, HandComputedPair) {
   // p1 = 0 with normal +z, p2 = (1, 0, 0) with normal tilted 60 degrees toward +x. n2 makes the
-  // smaller angle with the line, so p2 is the source: u = n2, d = p1 - p2 = -x, theta = u.d = -sin 60
-  // (bin floor(11 (1 - 0.866) / 2) = 0); v = unit(d x u) = +y, phi = v.n1 = 0 (bin 5);
+  // smaller angle with the line, so p2 is the source: u = n2, d = p1 - p2 = -x,
+  // theta = u.d = -sin 60 (bin floor(11 (1 - 0.866) / 2) = 0); v = unit(d x u) = +y,
+  // phi = v.n1 = 0 (bin 5);
   // w = u x v = (-cos 60, 0, sin 60), alpha = atan2(w.n1, u.n1) = 60 deg (bin floor(11 * 4/6) = 7).
   PointCloud cloud;
   const float t = static_cast<float>(M_PI / 3.0);

@@ -252,7 +252,8 @@ TEST(NormalsTest, DegenerateInputGivesNanNotCrash) {
   // NaN points among good ones: NaN normal there, the others valid and unaffected
   std::mt19937 rng(1);
   PointCloud mixed;
-  mixed.points = plane_points(Vector3f::Zero(), Vector3f::UnitX(), Vector3f::UnitY(), 10, 0.1f, rng);
+  mixed.points =
+      plane_points(Vector3f::Zero(), Vector3f::UnitX(), Vector3f::UnitY(), 10, 0.1f, rng);
   mixed.points[3] = Vector3f(kNan, 0.0f, 0.0f);
   mixed.points[50].z() = std::numeric_limits<float>::infinity();
   s.viewpoint = Vector3f(0, 0, 5);

@@ -30,8 +30,10 @@ struct NormalSettings {
 /// @brief Per-point normals and surface variation.
 struct NormalResult {
   std::vector<Vector3f> normals;  ///< unit normal per input point; NaN where not estimable
-  std::vector<float> curvature;   ///< λ0 / (λ0 + λ1 + λ2) per point (PCL's surface variation); NaN likewise
-  std::size_t num_invalid = 0;    ///< NaN normals (non-finite, < 3 neighbours, coincident, collinear)
+  /// λ0 / (λ0 + λ1 + λ2) per point (PCL's surface variation); NaN likewise
+  std::vector<float> curvature;
+  /// points with a NaN normal (non-finite, < 3 neighbours, coincident or collinear)
+  std::size_t num_invalid = 0;
 };
 
 /// @brief Normal of every point of `cloud`, by PCA of its neighbours in `tree`.
