@@ -1,0 +1,117 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+/// @file
+/// @brief LOAM scan matching (SEEDS B1.3, eq. 6-8): scan-to-scan against the previous frame's
+/// features, scan-to-local-map against a feature map, and the point-to-point ICP of the hybrid
+/// switch (SEEDS B3.1, eq. 20), all solved by one small Levenberg-Marquardt loop on SE(3).
+
+#include <cstddef>
+#include <optional>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "plumb/core/point_cloud.hpp"
+#include "plumb/core/status.hpp"
+#include "plumb/loam/features.hpp"
+#include "plumb/loam/residuals.hpp"
+#include "plumb/search/kdtree.hpp"
+
+namespace plumb {
+
+/// @brief Settings of loam_scan_to_scan(), loam_scan_to_map() and loam_icp_scan_to_scan().
+struct LoamSettings {
+  int max_iterations = 30;  ///< association + LM step rounds, >= 1
+  /// A correspondence (nearest feature j, l, m, or map neighbour) farther than this from the
+  /// transformed query point is not used [m].
+  double max_correspondence_distance = 1.0;
+  /// Scan-to-scan: l (edge) and m (plane) are searched on rings r_j +- 1 .. r_j +- ring_window
+  /// (LOAM: 2.5 rings), >= 1.
+  int ring_window = 2;
+  /// Huber kernel scale on the residual norm [m]; 0 = plain least squares.
+  double huber_scale = 0.05;
+  double min_step_translation = 1e-4;  ///< converged when an accepted step moves less than this [m] ...
+  double min_step_rotation = 1e-4;     ///< ... and rotates less than this [rad]
+  /// Fewer usable residuals than this at an iteration → Status::kInsufficientData (>= 6).
+  std::size_t min_correspondences = 20;
+  /// Status::kDegenerate when LoamResult::degeneracy is below this (0 disables the gate).
+  double degeneracy_threshold = 0.0;
+  double initial_lambda = 1e-4;  ///< LM damping on diag(H) of the first step
+  // Scan-to-map only.
+  int map_neighbors = 5;             ///< neighbours fitted per query (plane PCA, edge direction), >= 3
+  double map_plane_tolerance = 0.2;  ///< every neighbour must be within this of the fitted plane [m]
+  double map_edge_ratio = 3.0;       ///< an edge needs largest / second eigenvalue >= this
+};
+
+/// @brief Result of the LOAM scan matchers.
+struct LoamResult {
+  /// The estimate: maps the current frame into the previous frame (scan-to-scan / ICP target), or
+  /// into the map frame (scan-to-map). The guess when nothing could be solved.
+  Eigen::Isometry3d T_prev_cur = Eigen::Isometry3d::Identity();
+  Status status = Status::kInsufficientData;  ///< kOk: converged (and not degenerate)
+  bool converged = false;      ///< an accepted step fell below min_step_* (or no step could lower the cost)
+  int iterations = 0;          ///< association + LM rounds run
+  std::size_t num_edge = 0;    ///< edge residuals at the last iteration
+  std::size_t num_plane = 0;   ///< plane residuals at the last iteration
+  std::size_t num_point = 0;   ///< point-to-point residuals at the last iteration (ICP)
+  double rmse = 0.0;           ///< RMS residual norm at the last iteration, before its step [m]
+  /// Smallest eigenvalue of J^T J / num_residuals at the last iteration (unweighted, translation
+  /// [m] and rotation [rad] mixed as in delta). Near 0: a direction the features do not constrain.
+  double degeneracy = 0.0;
+};
+
+/// @brief A local feature map for scan-to-map matching: edge and plane points in the map frame,
+///        each with a kd-tree. Non-finite points are ignored.
+class LoamMap {
+ public:
+  /// @brief Build the trees (either cloud may be empty).
+  LoamMap(PointCloud edges, PointCloud planes);
+  const PointCloud& edges() const { return edges_; }    ///< @brief Edge points [m], map frame.
+  const PointCloud& planes() const { return planes_; }  ///< @brief Plane points [m], map frame.
+  /// @brief Edge tree, absent when there is no finite edge point.
+  const std::optional<KdTree3f>& edge_tree() const { return edge_tree_; }
+  /// @brief Plane tree, absent when there is no finite plane point.
+  const std::optional<KdTree3f>& plane_tree() const { return plane_tree_; }
+
+ private:
+  PointCloud edges_, planes_;
+  std::optional<KdTree3f> edge_tree_, plane_tree_;
+};
+
+/// @brief LOAM scan-to-scan (SEEDS eq. 6-8): the current frame's edge and plane points against the
+///        previous frame's edge (+candidate) and plane (+candidate) points.
+///
+/// Each round transforms the queries with the current estimate; an edge query gets its nearest
+/// previous edge point j and the nearest edge point l on another ring (eq. 6); a plane query gets
+/// its nearest plane point j, the nearest l on j's ring and m on another ring (eq. 7); then one
+/// Levenberg-Marquardt step on E_L1 (eq. 8, Huber-weighted) updates `T <- T exp(delta)`.
+/// @param prev features of the previous frame (its clouds must carry rings)
+/// @param cur features of the current frame
+/// @param T_prev_cur_guess initial estimate (e.g. from the IMU or constant velocity)
+/// @return the estimate; too few features or correspondences → Status::kInsufficientData
+/// @throws plumb::Error on misuse: non-finite guess, bad settings, non-empty feature clouds without rings
+/// @note Deterministic; single-threaded; O(iterations * n log m).
+inline LoamResult loam_scan_to_scan(const LoamFeatures& prev, const LoamFeatures& cur,
+                                    const Eigen::Isometry3d& T_prev_cur_guess,
+                                    const LoamSettings& settings = {});
+
+/// @brief LOAM scan-to-local-map: all current edge / plane points (incl. candidates) against a
+///        feature map; a plane is fitted to `map_neighbors` nearest map plane points (PCA), an edge
+///        line along the principal direction of the nearest map edge points.
+/// @param T_map_cur_guess initial estimate; the result's T_prev_cur is T_map_cur
+inline LoamResult loam_scan_to_map(const LoamMap& map, const LoamFeatures& cur,
+                                   const Eigen::Isometry3d& T_map_cur_guess,
+                                   const LoamSettings& settings = {});
+
+/// @brief Point-to-point ICP (SEEDS eq. 20) with the same solver: each point of `cur` against its
+///        nearest point of `prev` within max_correspondence_distance (the hybrid switch's matcher
+///        when a frame has too few plane points).
+/// @param prev_tree kd-tree built on prev.points
+inline LoamResult loam_icp_scan_to_scan(const PointCloud& prev, const KdTree3f& prev_tree,
+                                        const PointCloud& cur, const Eigen::Isometry3d& T_prev_cur_guess,
+                                        const LoamSettings& settings = {});
+
+}  // namespace plumb
+
+#include "plumb/loam/impl/odometry_impl.hpp"
