@@ -1,0 +1,123 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+/// @file
+/// @brief BIM-corrected laser odometry (SEEDS A3.3, issue 8 item 3), one frame at a time.
+///
+/// Per frame: the LiDAR frame is cut to a planar scan in the base frame (a z band around the
+/// LiDAR's height, SEEDS A2.1); ScanOdometry matches it by PLICP against a local map, seeded by the
+/// wheel odometry; the relative motion is chained in a PoseComposer. Every `correct_every` frames the
+/// frame's ground and vertical-plane key points (SEEDS A2.4-A2.5) are placed at the composed global
+/// pose and registered to the BIM cloud by point-to-plane ICP; when the registration passes the
+/// overlap and inlier gates, its result becomes an absolute anchor whose information comes from the
+/// final correspondences (directions the key points do not constrain, e.g. along a corridor, get
+/// none), and the composer applies it as SEEDS (5) `M ← M_e · M` through its Mahalanobis gate.
+
+#include <cstddef>
+#include <memory>
+
+#include <Eigen/Geometry>
+
+#include "plumb/core/point_cloud.hpp"
+#include "plumb/core/pose2.hpp"
+#include "plumb/core/types.hpp"
+#include "plumb/pipeline/pose_composer.hpp"
+#include "plumb/registration/icp.hpp"
+#include "plumb/scan2d/cloud_to_scan.hpp"
+#include "plumb/scan2d/scan_odometry.hpp"
+#include "plumb/search/kdtree.hpp"
+#include "plumb/segmentation/segment_frame.hpp"
+
+namespace plumb {
+
+/// @brief ICP settings of the per-frame BIM registration: point-to-plane from a close guess,
+///        partial overlap (the BIM has no furniture), Huber kernel.
+IcpSettings default_bim_correction_icp_settings();
+
+/// @brief Settings of BimOdometry.
+struct BimOdometrySettings {
+  Eigen::Isometry3d T_base_lidar = Eigen::Isometry3d::Identity();  ///< LiDAR points into the base frame
+  // 3D -> 2D (SEEDS A2.1): the planar scan is taken in the base frame.
+  double scan_band = 0.3;            ///< half height of the z band around the LiDAR's height [m]
+  double scan_angle_increment = 0.00872664625997164788;  ///< bin width [rad] (0.5°)
+  double scan_range_min = 0.3;       ///< [m]
+  double scan_range_max = 40.0;      ///< [m]
+  ScanOdometrySettings front_end = default_front_end();  ///< PLICP front end (T_base_laser is ignored)
+  // Motion noise added to the front end's relative motions (world-independent, per step).
+  double motion_sigma_xy = 0.01;      ///< [m] per metre travelled, plus PLICP's own covariance
+  double motion_sigma_theta = 0.01;   ///< [rad] per radian turned and per metre, plus PLICP's
+  double fallback_sigma_xy = 0.05;    ///< [m] per metre when the step fell back to wheel odometry
+  double fallback_sigma_theta = 0.05; ///< [rad] per radian and per metre likewise
+  // BIM correction (SEEDS A3.3 step 5).
+  bool use_bim = true;               ///< false: plain scan-matching odometry
+  std::size_t correct_every = 1;     ///< register key points every k-th frame (>= 1)
+  SegmentSettings segment;           ///< ground / vertical key points
+  double key_point_voxel = 0.15;     ///< key points thinned to this voxel before ICP [m] (0 = all)
+  IcpSettings icp = default_bim_correction_icp_settings();
+  double min_anchor_overlap = 0.5;   ///< ICP overlap below this: no anchor
+  std::size_t min_anchor_inliers = 100;  ///< fewer ICP inliers: no anchor
+  double anchor_sigma = 0.03;        ///< residual std of one key point against the BIM [m]
+  /// Information is scaled as if at most this many key points were independent (as-built deviations
+  /// of a wall are shared by all its points).
+  double anchor_effective_points = 50.0;
+  /// Directions whose normalised information is below this fraction of the strongest get none.
+  double anchor_rank_threshold = 0.02;
+  double anchor_length = 5.0;        ///< L normalising rotation against translation in that test [m]
+  PoseComposerSettings composer;
+  /// Covariance of the initial pose (world frame); default 2 cm / 0.5°.
+  Matrix6d initial_covariance = default_initial_covariance();
+
+  static ScanOdometrySettings default_front_end();
+  static Matrix6d default_initial_covariance();
+};
+
+/// @brief What happened to one frame.
+struct BimFrameResult {
+  double stamp = 0.0;
+  Eigen::Isometry3d T_bim_base = Eigen::Isometry3d::Identity();        ///< corrected pose
+  Eigen::Isometry3d T_bim_base_uncorrected = Eigen::Isometry3d::Identity();  ///< front end only, from the initial pose
+  ScanMatchMode mode = ScanMatchMode::kInitial;  ///< front-end outcome
+  Status scan_status = Status::kOk;     ///< cloud_to_scan outcome (kInsufficientData: no point in the band)
+  bool anchor_attempted = false;        ///< key points were registered this frame
+  Status icp_status = Status::kInsufficientData;
+  double icp_overlap = 0.0;
+  std::size_t icp_inliers = 0;
+  std::size_t num_key_points = 0;
+  int anchor_dof = 0;                   ///< rank of the anchor information (6 = fully constrained)
+  AnchorResult anchor;                  ///< the composer's decision (kIgnored when no anchor was made)
+  double seconds_front_end = 0.0, seconds_segment = 0.0, seconds_icp = 0.0, seconds_total = 0.0;
+};
+
+/// @brief The BIM-corrected odometry (see the file comment). Not thread-safe; deterministic.
+class BimOdometry {
+ public:
+  /// @param bim_cloud the BIM cloud with normals (bim::sample_surface of the relevant storey), world frame
+  /// @param T_bim_base0 initial pose of the base in the BIM frame (BimLocalizer or a known start)
+  /// @throws plumb::Error when the BIM cloud has no normals or too few points, or settings are invalid
+  BimOdometry(std::shared_ptr<const PointCloud> bim_cloud, const Eigen::Isometry3d& T_bim_base0,
+              const BimOdometrySettings& settings = {});
+
+  /// @brief Process one frame: LiDAR points (sensor frame, deskewed to `stamp` by the caller when
+  ///        needed), its stamp and the wheel-odometry pose of the base at that stamp (any fixed frame).
+  BimFrameResult process(const PointCloud& lidar_frame, double stamp, const Pose2& odom_pose);
+
+  const Eigen::Isometry3d& pose() const { return composer_.pose(); }
+  const PoseComposer& composer() const { return composer_; }
+  const BimOdometrySettings& settings() const { return settings_; }
+
+ private:
+  /// Registers the key points; fills the anchor fields of `out`.
+  void correct(const PointCloud& lidar_frame, BimFrameResult& out);
+
+  BimOdometrySettings settings_;
+  std::shared_ptr<const PointCloud> bim_;
+  std::unique_ptr<KdTree3f> bim_tree_;
+  ScanOdometry front_end_;
+  PoseComposer composer_;
+  Eigen::Isometry3d T_bim_base0_;
+  Pose2 first_front_pose_;
+  Pose2 last_front_pose_;
+  std::size_t frame_index_ = 0;
+};
+
+}  // namespace plumb

@@ -1,0 +1,80 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+/// @file
+/// @brief The BIM-corrected odometry over a frame dump (what `plumb run` does): BIM cloud from the
+///        model, initial localization of the first frame, per-frame BimOdometry with the wheel
+///        odometry as prior and for deskewing, and, when the dump has ground truth, the seed's
+///        Table 2 (error at observation points as % of the distance travelled) per method.
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "plumb/bim/mesh.hpp"
+#include "plumb/core/trajectory.hpp"
+#include "plumb/io/frame_dump.hpp"
+#include "plumb/pipeline/bim_odometry.hpp"
+#include "plumb/registration/localize.hpp"
+
+namespace plumb {
+
+/// @brief Settings of run_bim_odometry().
+struct RunSettings {
+  BimOdometrySettings odometry;     ///< T_base_lidar is taken from the dump's meta.json
+  double bim_spacing = 0.05;        ///< BIM cloud point spacing [m]
+  /// Initial pose of the base in the BIM frame. Empty: localize the first frame in the BIM cloud
+  /// (SEEDS A1, localize_coarse_to_fine).
+  std::optional<Eigen::Isometry3d> initial_pose;
+  LocalizeSettings localize;        ///< initial localization
+  bool deskew = true;               ///< undo motion distortion with the wheel odometry and per-point times
+  std::size_t max_frames = 0;       ///< 0 = all
+  std::function<void(std::size_t done, std::size_t total)> progress;  ///< called after each frame
+};
+
+/// @brief One row of the seed's Table 2.
+struct ObservationRow {
+  std::string name;           ///< "P1", "P2", "end"
+  std::size_t frame = 0;
+  double distance = 0.0;      ///< distance travelled (ground truth) [m]
+  double error_wheel = 0.0, error_lidar = 0.0, error_bim = 0.0;  ///< horizontal position error [m]
+};
+
+/// @brief Everything a run produced.
+struct RunReport {
+  Trajectory wheel;  ///< nominal wheel odometry anchored at the initial pose, BIM frame, frame stamps
+  Trajectory lidar;  ///< front end without BIM corrections
+  Trajectory bim;    ///< corrected
+  std::vector<BimFrameResult> frames;
+  bool localized = false;               ///< the initial pose came from localize_coarse_to_fine()
+  Status localization_status = Status::kOk;
+  LocalizeResult localization;          ///< when localized
+  Eigen::Isometry3d T_bim_base0 = Eigen::Isometry3d::Identity();
+  std::size_t bim_points = 0;
+  std::size_t anchors_accepted = 0, anchors_rejected = 0, anchors_attempted = 0;
+  std::size_t fallbacks = 0;            ///< front-end frames that fell back to the wheel prior
+  double seconds_localize = 0.0, seconds_frames = 0.0;
+  double frames_per_second = 0.0;
+  // With ground truth (gt.tum):
+  bool has_ground_truth = false;
+  double initial_error_xy = 0.0, initial_error_yaw_deg = 0.0;
+  std::vector<ObservationRow> table;    ///< observation points at 1/3, 2/3 of the path and the end
+  double path_length = 0.0;             ///< [m]
+  double ape_rmse_wheel = 0.0, ape_rmse_lidar = 0.0, ape_rmse_bim = 0.0;  ///< horizontal, no alignment [m]
+};
+
+/// @brief Run the BIM-corrected odometry over a frame dump (see the file comment).
+/// @return the report; the localization failing gives localization_status != kOk and no trajectory
+/// @throws plumb::Error for a dump without odom.csv, or a model without geometry
+RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& mesh, const RunSettings& settings = {});
+
+/// @brief Undo the motion distortion of a frame: each point, measured at stamp + time_i in the LiDAR
+///        frame of that instant, is moved into the LiDAR frame at `stamp` using T_ref_base(t), the base
+///        pose at absolute time t in any fixed frame. Points without a time are left as they are.
+void deskew_frame(PointCloud& frame, double stamp, const Eigen::Isometry3d& T_base_lidar,
+                  const std::function<Eigen::Isometry3d(double)>& T_ref_base);
+
+}  // namespace plumb

@@ -1,0 +1,196 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "plumb/pipeline/bim_odometry.hpp"
+
+#include <chrono>
+#include <cmath>
+
+#include <Eigen/Eigenvalues>
+
+#include "plumb/core/error.hpp"
+#include "plumb/core/lie.hpp"
+#include "plumb/filters/voxel_grid.hpp"
+
+namespace plumb {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+IcpSettings default_bim_correction_icp_settings() {
+  IcpSettings s;
+  s.method = IcpMethod::kPointToPlane;
+  s.max_correspondence_distance = 0.5;
+  s.distance_step = 0.1;
+  s.min_correspondence_distance = 0.15;
+  s.max_rounds = 4;
+  s.max_iterations = 15;
+  s.min_overlap = 0.5;
+  s.overlap_distance = 0.1;
+  s.kernel = RobustKernel::kHuber;
+  s.kernel_scale = 0.05;
+  return s;
+}
+
+ScanOdometrySettings BimOdometrySettings::default_front_end() {
+  ScanOdometrySettings s;
+  s.local_map_size = 5;
+  return s;
+}
+
+Matrix6d BimOdometrySettings::default_initial_covariance() {
+  Vector6d d;
+  const double t = 0.02, r = 0.5 * 3.14159265358979323846 / 180.0;
+  d << t * t, t * t, t * t, r * r, r * r, r * r;
+  return d.asDiagonal();
+}
+
+BimOdometry::BimOdometry(std::shared_ptr<const PointCloud> bim_cloud, const Eigen::Isometry3d& T_bim_base0,
+                         const BimOdometrySettings& settings)
+    : settings_(settings),
+      bim_(std::move(bim_cloud)),
+      front_end_([&] {
+        ScanOdometrySettings f = settings.front_end;
+        f.T_base_laser = Pose2{};  // the scan is cut in the base frame
+        return f;
+      }()),
+      composer_(T_bim_base0, settings.initial_covariance, settings.composer),
+      T_bim_base0_(T_bim_base0) {
+  PLUMB_CHECK(settings.correct_every >= 1, "BimOdometry: correct_every must be >= 1");
+  PLUMB_CHECK(settings.scan_band > 0.0 && settings.scan_angle_increment > 0.0 &&
+                  settings.scan_range_max > settings.scan_range_min,
+              "BimOdometry: scan band, angle increment and range limits must be positive and ordered");
+  PLUMB_CHECK(settings.anchor_sigma > 0.0 && settings.anchor_effective_points > 0.0 &&
+                  settings.anchor_length > 0.0 && settings.anchor_rank_threshold >= 0.0,
+              "BimOdometry: anchor_sigma, anchor_effective_points and anchor_length must be > 0");
+  PLUMB_CHECK(settings.T_base_lidar.matrix().allFinite(), "BimOdometry: T_base_lidar is not finite");
+  if (settings.use_bim) {
+    PLUMB_CHECK(bim_ != nullptr, "BimOdometry: no BIM cloud (set use_bim = false for plain odometry)");
+    PLUMB_CHECK(bim_->size() >= 100, "BimOdometry: the BIM cloud has " << bim_->size() << " points (need >= 100)");
+    PLUMB_CHECK(bim_->has_normals(), "BimOdometry: the BIM cloud has no normals (sample it from the model's faces)");
+    bim_tree_ = std::make_unique<KdTree3f>(bim_->points);
+  }
+}
+
+BimFrameResult BimOdometry::process(const PointCloud& lidar_frame, double stamp, const Pose2& odom_pose) {
+  const auto t0 = std::chrono::steady_clock::now();
+  BimFrameResult out;
+  out.stamp = stamp;
+
+  // SEEDS A2.1: the planar scan in the base frame, from a band around the LiDAR's height.
+  CloudToScanSettings cs;
+  const double h = settings_.T_base_lidar.translation().z();
+  cs.min_height = h - settings_.scan_band;
+  cs.max_height = h + settings_.scan_band;
+  cs.angle_increment = settings_.scan_angle_increment;
+  cs.range_min = settings_.scan_range_min;
+  cs.range_max = settings_.scan_range_max;
+  cs.T_target_sensor = settings_.T_base_lidar;
+  cs.stamp = stamp;
+  const CloudToScanResult scan = cloud_to_scan(lidar_frame, cs);
+  out.scan_status = scan.status;
+
+  // Front end: PLICP against the local map, wheel-odometry prior, fallback to the prior.
+  const ScanOdometryStep step = front_end_.add(scan.scan, odom_pose);
+  out.mode = step.mode;
+  if (frame_index_ > 0) {
+    const Pose2 rel = last_front_pose_.ominus().oplus(step.T_world_base);
+    const double dist = std::hypot(rel.x, rel.y), turn = std::abs(rel.theta);
+    const bool matched = step.mode == ScanMatchMode::kMatched || step.mode == ScanMatchMode::kDegenerate;
+    const double sxy = (matched ? settings_.motion_sigma_xy : settings_.fallback_sigma_xy) * dist + 1e-4;
+    const double sth = (matched ? settings_.motion_sigma_theta : settings_.fallback_sigma_theta) * (turn + dist) + 1e-5;
+    Matrix3d c = Vector3d(sxy * sxy, sxy * sxy, sth * sth).asDiagonal();
+    if (matched && step.match.covariance.allFinite()) c += step.match.covariance;
+    composer_.add_motion(rel.to_isometry(), planar_covariance(c, 1e-8, 1e-8));
+  }
+  last_front_pose_ = step.T_world_base;
+  out.seconds_front_end = seconds_since(t0);
+  // The uncorrected chain: the front end's motion since the first frame, from the initial pose.
+  if (frame_index_ == 0) first_front_pose_ = step.T_world_base;
+  out.T_bim_base_uncorrected = T_bim_base0_ * first_front_pose_.ominus().oplus(step.T_world_base).to_isometry();
+
+  if (settings_.use_bim && frame_index_ % settings_.correct_every == 0) correct(lidar_frame, out);
+  out.T_bim_base = composer_.pose();
+  ++frame_index_;
+  out.seconds_total = seconds_since(t0);
+  return out;
+}
+
+void BimOdometry::correct(const PointCloud& lidar_frame, BimFrameResult& out) {
+  const auto t0 = std::chrono::steady_clock::now();
+  // SEEDS A2.4-A2.5: ground and vertical-plane key points of the frame.
+  const SegmentResult seg = segment_frame(lidar_frame, settings_.segment);
+  PointCloud keys;
+  for (std::size_t i = 0; i < seg.labels.size(); ++i) {
+    if (seg.labels[i] == kSegmentGround || seg.labels[i] == kSegmentVertical) keys.points.push_back(lidar_frame.points[i]);
+  }
+  if (settings_.key_point_voxel > 0.0 && keys.size() > 0) {
+    VoxelGridSettings vs;
+    vs.leaf_size = settings_.key_point_voxel;
+    keys = voxel_grid(keys, vs).cloud;
+  }
+  out.num_key_points = keys.size();
+  out.seconds_segment = seconds_since(t0);
+  if (keys.size() < settings_.min_anchor_inliers) return;
+
+  // SEEDS A3.3 step 5: key points at the composed pose, registered to the BIM cloud.
+  const auto t1 = std::chrono::steady_clock::now();
+  out.anchor_attempted = true;
+  const Eigen::Isometry3d T_pred = composer_.pose() * settings_.T_base_lidar;
+  const IcpResult icp = align_icp(keys, *bim_, *bim_tree_, T_pred, settings_.icp);
+  out.icp_status = icp.status;
+  out.icp_overlap = icp.overlap;
+  out.icp_inliers = icp.num_inliers;
+  out.seconds_icp = seconds_since(t1);
+  if (icp.status != Status::kOk && icp.status != Status::kNotConverged) return;
+  if (icp.overlap < settings_.min_anchor_overlap || icp.num_inliers < settings_.min_anchor_inliers) return;
+
+  // Information of the result from its final correspondences, first about the robot's position c
+  // (so the rank test compares like with like), then moved to the world-origin left perturbation.
+  const Eigen::Isometry3d& T = icp.T_target_source;
+  const Vector3d c = (T * settings_.T_base_lidar.inverse()).translation();
+  const float gate_sq = static_cast<float>(icp.final_correspondence_distance * icp.final_correspondence_distance);
+  Matrix6d H = Matrix6d::Zero();
+  std::size_t n = 0;
+  for (const Vector3f& p : keys.points) {
+    const Vector3f q = (T * p.cast<double>()).cast<float>();
+    const auto nb = bim_tree_->nearest(q, gate_sq);
+    if (!nb) continue;
+    const Vector3d normal = bim_->normals[nb->index].cast<double>();
+    if (!normal.allFinite()) continue;
+    Vector6d J;
+    J.head<3>() = normal;
+    J.tail<3>() = (q.cast<double>() - c).cross(normal);
+    H.noalias() += J * J.transpose();
+    ++n;
+  }
+  if (n < settings_.min_anchor_inliers) return;
+  const double scale = std::min(1.0, settings_.anchor_effective_points / static_cast<double>(n)) /
+                       (settings_.anchor_sigma * settings_.anchor_sigma);
+  H *= scale;
+  // Drop directions the key points barely constrain (corridor axis, a single plane...).
+  Vector6d D;
+  D << 1, 1, 1, settings_.anchor_length, settings_.anchor_length, settings_.anchor_length;
+  const Matrix6d Dm = D.asDiagonal().inverse();
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> es(Dm * H * Dm);
+  Vector6d ev = es.eigenvalues();
+  const double largest = ev(5);
+  if (!(largest > 0.0)) return;
+  for (int i = 0; i < 6; ++i) {
+    if (ev(i) < settings_.anchor_rank_threshold * largest) {
+      ev(i) = 0.0;
+    } else {
+      ++out.anchor_dof;
+    }
+  }
+  const Matrix6d H_kept = D.asDiagonal() * (es.eigenvectors() * ev.asDiagonal() * es.eigenvectors().transpose()) *
+                          D.asDiagonal();
+  Eigen::Isometry3d T_c = Eigen::Isometry3d::Identity();
+  T_c.translation() = c;
+  const Matrix6d info_world = body_to_world_information(T_c, 0.5 * (H_kept + H_kept.transpose()));
+  out.anchor = composer_.add_anchor(T * settings_.T_base_lidar.inverse(), info_world);
+}
+
+}  // namespace plumb

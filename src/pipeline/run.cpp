@@ -1,0 +1,189 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "plumb/pipeline/run.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cctype>
+#include <limits>
+#include <set>
+
+#include "plumb/bim/sample.hpp"
+#include "plumb/core/error.hpp"
+#include "plumb/io/carmen.hpp"
+
+namespace plumb {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// Wheel odometry pose at time t by linear interpolation (clamped to the first / last sample).
+class OdometryInterpolator {
+ public:
+  explicit OdometryInterpolator(std::vector<io::OdomSample> samples) : s_(std::move(samples)) {
+    PLUMB_CHECK(!s_.empty(), "run_bim_odometry: odom.csv holds no sample");
+  }
+  Pose2 at(double t) const {
+    if (t <= s_.front().stamp) return s_.front().pose;
+    if (t >= s_.back().stamp) return s_.back().pose;
+    const auto it = std::lower_bound(s_.begin(), s_.end(), t,
+                                     [](const io::OdomSample& a, double v) { return a.stamp < v; });
+    const io::OdomSample& b = *it;
+    const io::OdomSample& a = *(it - 1);
+    return io::interpolate_pose2(a.pose, b.pose, (t - a.stamp) / (b.stamp - a.stamp));
+  }
+
+ private:
+  std::vector<io::OdomSample> s_;
+};
+
+double yaw_of(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); }
+
+double horizontal_error(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  return (a.translation() - b.translation()).head<2>().norm();
+}
+
+}  // namespace
+
+void deskew_frame(PointCloud& frame, double stamp, const Eigen::Isometry3d& T_base_lidar,
+                  const std::function<Eigen::Isometry3d(double)>& T_ref_base) {
+  if (!frame.has_times()) return;
+  PLUMB_CHECK(frame.times.size() == frame.points.size(), "deskew_frame: " << frame.times.size() << " times for "
+                                                                          << frame.points.size() << " points");
+  const Eigen::Isometry3d T_lidar_base = T_base_lidar.inverse();
+  const Eigen::Isometry3d T_base0_ref = T_ref_base(stamp).inverse();
+  // Points of one sweep share a few hundred distinct firing times: cache the last transform.
+  float last_time = std::numeric_limits<float>::quiet_NaN();
+  Eigen::Matrix3f R = Eigen::Matrix3f::Identity();
+  Eigen::Vector3f t = Eigen::Vector3f::Zero();
+  for (std::size_t i = 0; i < frame.points.size(); ++i) {
+    const float ti = frame.times[i];
+    if (!std::isfinite(ti)) continue;
+    if (ti != last_time) {
+      const Eigen::Isometry3d T = T_lidar_base * T_base0_ref * T_ref_base(stamp + ti) * T_base_lidar;
+      R = T.linear().cast<float>();
+      t = T.translation().cast<float>();
+      last_time = ti;
+    }
+    frame.points[i] = R * frame.points[i] + t;
+  }
+}
+
+RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& mesh, const RunSettings& settings) {
+  PLUMB_CHECK(dump.num_frames() > 0, dump.dir() << ": the dump has no frame");
+  PLUMB_CHECK(dump.has_odometry(), dump.dir() << ": the dump has no odom.csv (wheel odometry is the front end's prior)");
+  PLUMB_CHECK(mesh.num_triangles() > 0, "run_bim_odometry: the model has no geometry");
+  RunReport report;
+  const OdometryInterpolator odom(dump.odometry());
+  const Eigen::Isometry3d T_base_lidar = dump.meta().T_base_lidar;
+
+  // BIM cloud: every element the LiDAR can see (doors are open, windows transmit).
+  static const std::set<std::string> kInvisible = {"IFCDOOR", "IFCWINDOW", "IFCSPACE", "IFCOPENINGELEMENT",
+                                                   "IFCFURNISHINGELEMENT", "IFCFURNITURE"};
+  bim::SurfaceSampleSettings ss;
+  ss.spacing = settings.bim_spacing;
+  std::set<std::string> types;
+  for (const bim::BimElement& e : mesh.elements) {
+    std::string upper = e.type;
+    std::transform(upper.begin(), upper.end(), upper.begin(), [](unsigned char c) { return std::toupper(c); });
+    if (!kInvisible.count(upper) && e.num_triangles > 0) types.insert(e.type);
+  }
+  ss.filter.types.assign(types.begin(), types.end());
+  auto bim_cloud = std::make_shared<PointCloud>(bim::sample_surface(mesh, ss));
+  report.bim_points = bim_cloud->size();
+
+  const std::size_t n = settings.max_frames > 0 ? std::min(settings.max_frames, dump.num_frames()) : dump.num_frames();
+  auto frame_at = [&](std::size_t i) {
+    PointCloud f = dump.frame(i);
+    if (settings.deskew) {
+      deskew_frame(f, dump.stamp(i), T_base_lidar, [&](double t) { return odom.at(t).to_isometry(); });
+    }
+    return f;
+  };
+
+  // SEEDS A1: the first frame in the BIM.
+  const auto t_loc = std::chrono::steady_clock::now();
+  if (settings.initial_pose) {
+    report.T_bim_base0 = *settings.initial_pose;
+  } else {
+    report.localized = true;
+    PointCloud first = frame_at(0);
+    report.localization = localize_coarse_to_fine(first, *bim_cloud, settings.localize);
+    report.localization_status = report.localization.status;
+    report.T_bim_base0 = report.localization.T_target_source * T_base_lidar.inverse();
+  }
+  report.seconds_localize = seconds_since(t_loc);
+  Trajectory gt;
+  if (dump.has_ground_truth()) {
+    gt = dump.ground_truth();
+    report.has_ground_truth = gt.size() >= n;
+    for (std::size_t i = 0; report.has_ground_truth && i < n; ++i) {
+      PLUMB_CHECK(!gt.has_stamps() || std::abs(gt.stamps[i] - dump.stamp(i)) < 1e-6,
+                  dump.dir() << "/gt.tum: pose " << i << " has stamp " << gt.stamps[i] << ", frame " << i
+                             << " has " << dump.stamp(i) << " (gt.tum holds one pose per frame)");
+    }
+  }
+  if (report.has_ground_truth) {
+    report.initial_error_xy = horizontal_error(report.T_bim_base0, gt.poses[0]);
+    report.initial_error_yaw_deg = std::abs(std::remainder(yaw_of(report.T_bim_base0) - yaw_of(gt.poses[0]), 2 * M_PI)) * 180.0 / M_PI;
+  }
+  if (report.localization_status != Status::kOk) return report;
+
+  BimOdometrySettings os = settings.odometry;
+  os.T_base_lidar = T_base_lidar;
+  BimOdometry odometry(bim_cloud, report.T_bim_base0, os);
+  const Pose2 odom0 = odom.at(dump.stamp(0));
+  const auto t_frames = std::chrono::steady_clock::now();
+  for (std::size_t i = 0; i < n; ++i) {
+    const double stamp = dump.stamp(i);
+    const Pose2 o = odom.at(stamp);
+    const PointCloud frame = frame_at(i);
+    BimFrameResult r = odometry.process(frame, stamp, o);
+    report.wheel.push_back(stamp, report.T_bim_base0 * odom0.ominus().oplus(o).to_isometry());
+    report.lidar.push_back(stamp, r.T_bim_base_uncorrected);
+    report.bim.push_back(stamp, r.T_bim_base);
+    report.anchors_attempted += r.anchor_attempted ? 1 : 0;
+    report.anchors_accepted += r.anchor.decision == AnchorDecision::kAccepted ? 1 : 0;
+    report.anchors_rejected += r.anchor.decision == AnchorDecision::kRejected ? 1 : 0;
+    report.fallbacks += r.mode == ScanMatchMode::kFallback ? 1 : 0;
+    report.frames.push_back(std::move(r));
+    if (settings.progress) settings.progress(i + 1, n);
+  }
+  report.seconds_frames = seconds_since(t_frames);
+  report.frames_per_second = report.seconds_frames > 0 ? static_cast<double>(n) / report.seconds_frames : 0.0;
+
+  if (report.has_ground_truth) {
+    std::vector<double> dist(n, 0.0);
+    for (std::size_t i = 1; i < n; ++i) dist[i] = dist[i - 1] + horizontal_error(gt.poses[i], gt.poses[i - 1]);
+    report.path_length = dist[n - 1];
+    auto row = [&](const std::string& name, std::size_t i) {
+      ObservationRow r;
+      r.name = name;
+      r.frame = i;
+      r.distance = dist[i];
+      r.error_wheel = horizontal_error(report.wheel.poses[i], gt.poses[i]);
+      r.error_lidar = horizontal_error(report.lidar.poses[i], gt.poses[i]);
+      r.error_bim = horizontal_error(report.bim.poses[i], gt.poses[i]);
+      return r;
+    };
+    for (int k = 1; k <= 2; ++k) {
+      const double target = report.path_length * k / 3.0;
+      const std::size_t i = static_cast<std::size_t>(std::lower_bound(dist.begin(), dist.end(), target) - dist.begin());
+      report.table.push_back(row("P" + std::to_string(k), std::min(i, n - 1)));
+    }
+    report.table.push_back(row("end", n - 1));
+    auto rmse = [&](const Trajectory& t) {
+      double s = 0.0;
+      for (std::size_t i = 0; i < n; ++i) s += std::pow(horizontal_error(t.poses[i], gt.poses[i]), 2);
+      return std::sqrt(s / static_cast<double>(n));
+    };
+    report.ape_rmse_wheel = rmse(report.wheel);
+    report.ape_rmse_lidar = rmse(report.lidar);
+    report.ape_rmse_bim = rmse(report.bim);
+  }
+  return report;
+}
+
+}  // namespace plumb
