@@ -23,6 +23,7 @@
 #include "plumb/filters/crop.hpp"
 #include "plumb/filters/voxel_grid.hpp"
 
+#include "plumb/features/fpfh.hpp"
 #include "plumb/features/normals.hpp"
 
 #include "plumb/io/calib_tuples.hpp"
@@ -52,4 +53,6 @@
 #include "plumb/bim/sample.hpp"
 #include "plumb/bim/step.hpp"
 
+#include "plumb/pipeline/bim_odometry.hpp"
 #include "plumb/pipeline/pose_composer.hpp"
+#include "plumb/pipeline/run.hpp"
