@@ -47,7 +47,9 @@
 #include "plumb/calibration/odometry_laser.hpp"
 #include "plumb/calibration/tuple_extraction.hpp"
 
+#include "plumb/bim/demo_building.hpp"
 #include "plumb/bim/ifc.hpp"
+#include "plumb/bim/ifc_writer.hpp"
 #include "plumb/bim/mesh.hpp"
 #include "plumb/bim/polygon.hpp"
 #include "plumb/bim/sample.hpp"
