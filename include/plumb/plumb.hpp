@@ -26,6 +26,14 @@
 #include "plumb/features/fpfh.hpp"
 #include "plumb/features/normals.hpp"
 
+#include "plumb/registration/feature_index.hpp"
+#include "plumb/registration/horn.hpp"
+#include "plumb/registration/icp.hpp"
+#include "plumb/registration/kernels.hpp"
+#include "plumb/registration/localize.hpp"
+#include "plumb/registration/overlap.hpp"
+#include "plumb/registration/sac_ia.hpp"
+
 #include "plumb/io/calib_tuples.hpp"
 #include "plumb/io/carmen.hpp"
 #include "plumb/io/cloud_io.hpp"
