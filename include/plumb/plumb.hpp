@@ -56,6 +56,12 @@
 #include "plumb/calibration/odometry_laser.hpp"
 #include "plumb/calibration/tuple_extraction.hpp"
 
+#include "plumb/imu/imu.hpp"
+#include "plumb/imu/preintegration.hpp"
+#include "plumb/optim/imu_factor.hpp"
+#include "plumb/optim/least_squares.hpp"
+#include "plumb/optim/robust_loss.hpp"
+
 #include "plumb/bim/demo_building.hpp"
 #include "plumb/bim/floor_plan.hpp"
 #include "plumb/bim/ifc.hpp"
