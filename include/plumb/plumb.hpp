@@ -34,6 +34,13 @@
 #include "plumb/registration/overlap.hpp"
 #include "plumb/registration/sac_ia.hpp"
 
+#include "plumb/segmentation/frame_sample.hpp"
+#include "plumb/segmentation/ground.hpp"
+#include "plumb/segmentation/plane_ransac.hpp"
+#include "plumb/segmentation/presegment.hpp"
+#include "plumb/segmentation/segment_frame.hpp"
+#include "plumb/segmentation/vertical_planes.hpp"
+
 #include "plumb/io/calib_tuples.hpp"
 #include "plumb/io/carmen.hpp"
 #include "plumb/io/cloud_io.hpp"
@@ -49,6 +56,7 @@
 #include "plumb/eval/kitti_segments.hpp"
 #include "plumb/eval/metrics.hpp"
 
+#include "plumb/scan2d/cloud_to_scan.hpp"
 #include "plumb/scan2d/laser_scan.hpp"
 #include "plumb/scan2d/plicp.hpp"
 #include "plumb/scan2d/scan_odometry.hpp"
