@@ -64,6 +64,11 @@
 #include "plumb/calibration/odometry_laser.hpp"
 #include "plumb/calibration/tuple_extraction.hpp"
 
+#include "plumb/loam/features.hpp"
+#include "plumb/loam/odometry.hpp"
+#include "plumb/loam/range_image.hpp"
+#include "plumb/loam/residuals.hpp"
+
 #include "plumb/imu/imu.hpp"
 #include "plumb/imu/preintegration.hpp"
 #include "plumb/optim/imu_factor.hpp"
