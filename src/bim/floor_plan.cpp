@@ -131,7 +131,7 @@ void fill_cross_section(const OccupancyGrid& g, const BimMesh& mesh, const BimEl
   }
 }
 
-OccupancyGrid slice_storey(const BimMesh& mesh, int storey, const FloorPlanSettings& s) {
+OccupancyGrid slice_storey(const BimMesh& mesh, int storey, const OccupancyGridSettings& s) {
   Vector3d lo, hi;
   mesh.bounds(lo, hi);
   OccupancyGrid g;
@@ -193,7 +193,7 @@ OccupancyGrid slice_storey(const BimMesh& mesh, int storey, const FloorPlanSetti
   return g;
 }
 
-void check_settings(const BimMesh& mesh, const FloorPlanSettings& s) {
+void check_settings(const BimMesh& mesh, const OccupancyGridSettings& s) {
   PLUMB_CHECK(s.resolution > 0.0 && std::isfinite(s.resolution),
               "floor_plan: resolution must be positive, got " << s.resolution);
   PLUMB_CHECK(s.slice_max > s.slice_min, "floor_plan: slice_max (" << s.slice_max << ") must exceed slice_min ("
@@ -205,7 +205,7 @@ void check_settings(const BimMesh& mesh, const FloorPlanSettings& s) {
 
 }  // namespace
 
-std::vector<double> storey_free_areas(const BimMesh& mesh, const FloorPlanSettings& settings) {
+std::vector<double> storey_free_areas(const BimMesh& mesh, const OccupancyGridSettings& settings) {
   check_settings(mesh, settings);
   std::vector<double> areas;
   for (std::size_t k = 0; k < mesh.storeys.size(); ++k) {
@@ -214,7 +214,7 @@ std::vector<double> storey_free_areas(const BimMesh& mesh, const FloorPlanSettin
   return areas;
 }
 
-OccupancyGrid floor_plan(const BimMesh& mesh, const FloorPlanSettings& settings) {
+OccupancyGrid floor_plan(const BimMesh& mesh, const OccupancyGridSettings& settings) {
   check_settings(mesh, settings);
   const int num_storeys = static_cast<int>(mesh.storeys.size());
   if (settings.storey >= 0) {

@@ -157,7 +157,7 @@ ScenarioPlan plan_scenario(const bim::BimMesh& mesh, const ScenarioSettings& s) 
   WorldSettings ws = s.world;
   ws.seed = mix(s.seed, 0);
   if (s.kind == ScenarioKind::kIndoor) {
-    bim::FloorPlanSettings fs = s.floor_plan;
+    bim::OccupancyGridSettings fs = s.floor_plan;
     fs.storey = s.storey;
     plan.grid = bim::floor_plan(mesh, fs);
     plan.storey = plan.grid.storey;

@@ -62,7 +62,7 @@ BimMesh three_rooms(bool with_floor = true) {
 
 TEST(FloorPlanTest, SliceOfThreeRooms) {
   const BimMesh mesh = three_rooms();
-  FloorPlanSettings s;
+  OccupancyGridSettings s;
   s.resolution = 0.05;
   const OccupancyGrid g = floor_plan(mesh, s);
   EXPECT_EQ(g.storey, 0);
@@ -89,7 +89,7 @@ TEST(FloorPlanTest, SliceOfThreeRooms) {
 
 TEST(FloorPlanTest, DoorsAreOpenOnlyWhenIgnored) {
   const BimMesh mesh = three_rooms();
-  FloorPlanSettings s;
+  OccupancyGridSettings s;
   const OccupancyGrid open = floor_plan(mesh, s);
   const std::vector<float> clr_open = sim::clearance_map(open);
   sim::RouteSettings rs;
@@ -112,7 +112,7 @@ TEST(FloorPlanTest, NoWalkableStoreyIsAClearError) {
   BimMesh no_storey = three_rooms();
   no_storey.storeys.clear();
   EXPECT_THROW(floor_plan(no_storey), Error);
-  FloorPlanSettings s;
+  OccupancyGridSettings s;
   s.storey = 3;
   EXPECT_THROW(floor_plan(three_rooms(), s), Error);
   // A storey placed 5 m above the only floor has no floor of its own.

@@ -49,7 +49,7 @@ struct OccupancyGrid {
 };
 
 /// @brief Settings of floor_plan().
-struct FloorPlanSettings {
+struct OccupancyGridSettings {
   int storey = -1;            ///< BimMesh::storeys index; -1 = the storey with the largest free floor area
   double resolution = 0.05;   ///< cell size [m]
   double slice_min = 0.3;     ///< bottom of the obstacle slice above the storey elevation [m]
@@ -70,9 +70,9 @@ struct FloorPlanSettings {
 /// @throws plumb::Error when the mesh has no storey, the requested storey does not exist or is not
 ///         walkable, or (storey = -1) no storey has min_walkable_area of free floor.
 /// @note O(triangles + cells) per storey tried.
-OccupancyGrid floor_plan(const BimMesh& mesh, const FloorPlanSettings& settings = {});
+OccupancyGrid floor_plan(const BimMesh& mesh, const OccupancyGridSettings& settings = {});
 
 /// @brief Free floor area of every storey [m^2] (same slicing as floor_plan()), in storey order.
-std::vector<double> storey_free_areas(const BimMesh& mesh, const FloorPlanSettings& settings = {});
+std::vector<double> storey_free_areas(const BimMesh& mesh, const OccupancyGridSettings& settings = {});
 
 }  // namespace plumb::bim

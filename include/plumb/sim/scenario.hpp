@@ -50,7 +50,7 @@ struct ScenarioSettings {
   double site_ground_margin = 120.0;  ///< site: ground plane beyond the route [m]
   double site_tile = 10.0;          ///< site: ground tile size (each tile gets its own as-built deviation) [m]
   WorldSettings world;           ///< as-built deviations, clutter, people, seed (its seed is overridden by `seed`)
-  bim::FloorPlanSettings floor_plan;
+  bim::OccupancyGridSettings floor_plan;
   RouteSettings route;
   RobotSettings robot;
   WheelSettings wheels;          ///< nominal wheel geometry and its true errors (seed overridden)
