@@ -22,9 +22,9 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 IcpSettings default_bim_correction_icp_settings() {
   IcpSettings s;
   s.method = IcpMethod::kPointToPlane;
-  s.max_correspondence_distance = 0.5;
-  s.distance_step = 0.1;
-  s.min_correspondence_distance = 0.15;
+  s.max_correspondence_distance = 0.2;
+  s.distance_step = 0.05;
+  s.min_correspondence_distance = 0.1;
   s.max_rounds = 4;
   s.max_iterations = 15;
   s.min_overlap = 0.5;
