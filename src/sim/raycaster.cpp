@@ -6,6 +6,11 @@
 #include <limits>
 #include <utility>
 
+#if defined(__SSE2__) || defined(_M_X64)
+#include <emmintrin.h>
+#define PLUMB_RAYCASTER_SSE2 1
+#endif
+
 #include "plumb/bim/mesh.hpp"
 #include "plumb/core/error.hpp"
 
@@ -23,8 +28,11 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr int kMaxDepth = 56;        // the build switches to median splits below this depth
-constexpr int kStackSize = 128;      // traversal stack: depth <= kMaxDepth + 32 median levels
 constexpr int kMaxSahLeaf = 16;      // a node this small may stay a leaf when no split pays off
+// The 4-wide tree is at most as deep as the binary one (<= kMaxDepth + 32 median levels + the
+// chunking of a leaf into groups of four) and a node pushes at most three children.
+constexpr int kMaxTreeDepth = kMaxDepth + 48;
+constexpr int kStackSize = 3 * kMaxTreeDepth + 4;
 
 struct Aabb {
   Vector3d lo = Vector3d::Constant(kInf);
@@ -56,49 +64,44 @@ float round_up(double x) {
   return f;
 }
 
+/// A node of the binary SAH tree the 4-wide tree is collapsed from.
+struct BinaryNode {
+  Aabb box;
+  std::uint32_t left = ~0u, right = ~0u;  // children; ~0u for a leaf
+  std::size_t begin = 0, end = 0;         // triangles index[begin, end) of a leaf
+  bool leaf() const { return left == ~0u; }
+};
+
 struct Builder {
   const RayCasterSettings& settings;
   std::vector<Aabb> tri_box;
   std::vector<Vector3d> centroid;
   std::vector<std::uint32_t> index;
-  std::vector<RayCaster::Node>& nodes;
+  std::vector<BinaryNode> bnodes;
 
-  void set_bounds(std::uint32_t node, const Aabb& b) {
-    // Outward float rounding plus a pad that covers the float rounding of the ray origin.
-    for (int k = 0; k < 3; ++k) {
-      const double pad = 1e-4 + 1e-6 * std::max(std::abs(b.lo[k]), std::abs(b.hi[k]));
-      nodes[node].lo[k] = round_down(b.lo[k] - pad);
-      nodes[node].hi[k] = round_up(b.hi[k] + pad);
-    }
+  std::uint32_t make_leaf(std::uint32_t node, std::size_t begin, std::size_t end) {
+    bnodes[node].begin = begin;
+    bnodes[node].end = end;
+    return node;
   }
 
-  void make_leaf(std::uint32_t node, std::size_t begin, std::size_t end) {
-    nodes[node].offset = static_cast<std::uint32_t>(begin);
-    nodes[node].count = static_cast<std::uint32_t>(end - begin);
-  }
-
-  void build(std::uint32_t node, std::size_t begin, std::size_t end, int depth) {
+  /// Binary SAH build of index[begin, end) into bnodes[node].
+  std::uint32_t build(std::uint32_t node, std::size_t begin, std::size_t end, int depth) {
     Aabb box, cbox;
     for (std::size_t i = begin; i < end; ++i) {
       box.grow(tri_box[index[i]]);
       cbox.grow(centroid[index[i]]);
     }
-    set_bounds(node, box);
+    bnodes[node].box = box;
     const std::size_t count = end - begin;
-    if (count <= static_cast<std::size_t>(settings.leaf_size)) {
-      make_leaf(node, begin, end);
-      return;
-    }
+    if (count <= static_cast<std::size_t>(settings.leaf_size)) return make_leaf(node, begin, end);
     const Vector3d extent = cbox.hi - cbox.lo;
     int axis = 0;
     extent.maxCoeff(&axis);
     std::size_t mid = begin;
     if (!(extent[axis] > 0.0)) {
       // Every centroid coincides: no spatial split separates them.
-      if (count <= 255) {
-        make_leaf(node, begin, end);
-        return;
-      }
+      if (count <= 255) return make_leaf(node, begin, end);
       mid = begin + count / 2;
     } else if (depth >= kMaxDepth) {
       mid = begin + count / 2;
@@ -157,8 +160,7 @@ struct Builder {
         if (best_axis < 0 && count > 255) {
           mid = begin + count / 2;
         } else {
-          make_leaf(node, begin, end);
-          return;
+          return make_leaf(node, begin, end);
         }
       } else {
         const double scale = nb / extent[best_axis];
@@ -172,14 +174,152 @@ struct Builder {
         if (mid == begin || mid == end) mid = begin + count / 2;  // cannot happen; stay safe
       }
     }
-    const auto left = static_cast<std::uint32_t>(nodes.size());
-    nodes.emplace_back();
+    const auto left = static_cast<std::uint32_t>(bnodes.size());
+    bnodes.emplace_back();
     build(left, begin, mid, depth + 1);
-    const auto right = static_cast<std::uint32_t>(nodes.size());
-    nodes.emplace_back();
+    const auto right = static_cast<std::uint32_t>(bnodes.size());
+    bnodes.emplace_back();
     build(right, mid, end, depth + 1);
-    nodes[node].offset = right;
-    nodes[node].count = 0;
+    bnodes[node].left = left;
+    bnodes[node].right = right;
+    return node;
+  }
+};
+
+/// Collapses the binary tree into 4-wide nodes whose slots hold nodes or single triangles.
+struct Collapser {
+  Builder& b;
+  std::vector<RayCaster::Node>& nodes;
+  std::vector<std::uint32_t>& leaf_triangle;  // triangle of each leaf slot, in slot order
+  int max_depth = 0;
+
+  /// A child slot in the making: a binary node or one triangle.
+  struct Item {
+    bool is_triangle = false;
+    std::uint32_t id = 0;  // binary node or triangle
+  };
+
+  const Aabb& box_of(const Item& it) const { return it.is_triangle ? b.tri_box[it.id] : b.bnodes[it.id].box; }
+
+  std::uint32_t new_node() {
+    nodes.emplace_back();
+    RayCaster::Node& nd = nodes.back();
+    for (int s = 0; s < 4; ++s) {
+      for (int k = 0; k < 3; ++k) {
+        nd.bounds[2 * k][s] = std::numeric_limits<float>::infinity();
+        nd.bounds[2 * k + 1][s] = -std::numeric_limits<float>::infinity();
+      }
+      nd.child[s] = ~0u;
+    }
+    nd.num_children = 0;
+    nd.triangle_mask = 0;
+    nd.unused[0] = nd.unused[1] = 0;
+    return static_cast<std::uint32_t>(nodes.size() - 1);
+  }
+
+  void set_slot(std::uint32_t node, int slot, const Aabb& box, std::uint32_t child, bool is_triangle) {
+    RayCaster::Node& nd = nodes[node];
+    // Outward float rounding plus a pad that covers the float rounding of the ray origin and of
+    // the slab distances (so a box never culls what the exact triangle test would hit).
+    for (int k = 0; k < 3; ++k) {
+      const double pad = 1e-4 + 1e-6 * std::max(std::abs(box.lo[k]), std::abs(box.hi[k]));
+      nd.bounds[2 * k][slot] = round_down(box.lo[k] - pad);
+      nd.bounds[2 * k + 1][slot] = round_up(box.hi[k] + pad);
+    }
+    nd.child[slot] = child;
+    if (is_triangle) nd.triangle_mask |= 1u << slot;
+    nd.num_children = std::max(nd.num_children, static_cast<std::uint32_t>(slot + 1));
+  }
+
+  std::uint32_t triangle_slot(std::uint32_t triangle) {
+    leaf_triangle.push_back(triangle);
+    return RayCaster::kTriangleBit | static_cast<std::uint32_t>(leaf_triangle.size() - 1);
+  }
+
+  /// A node over the triangles index[begin, end): four groups along the longest centroid axis.
+  std::uint32_t emit_triangles(std::size_t begin, std::size_t end, int depth) {
+    max_depth = std::max(max_depth, depth);
+    const std::uint32_t node = new_node();
+    const std::size_t count = end - begin;
+    if (count <= 4) {
+      for (std::size_t i = begin; i < end; ++i) {
+        const std::uint32_t t = b.index[i];
+        set_slot(node, static_cast<int>(i - begin), b.tri_box[t], triangle_slot(t), true);
+      }
+      return node;
+    }
+    Aabb cbox;
+    for (std::size_t i = begin; i < end; ++i) cbox.grow(b.centroid[b.index[i]]);
+    int axis = 0;
+    (cbox.hi - cbox.lo).maxCoeff(&axis);
+    std::sort(b.index.begin() + static_cast<std::ptrdiff_t>(begin), b.index.begin() + static_cast<std::ptrdiff_t>(end),
+              [&](std::uint32_t x, std::uint32_t y) { return b.centroid[x][axis] < b.centroid[y][axis]; });
+    for (int s = 0; s < 4; ++s) {
+      const std::size_t lo = begin + count * static_cast<std::size_t>(s) / 4;
+      const std::size_t hi = begin + count * static_cast<std::size_t>(s + 1) / 4;
+      Aabb box;
+      for (std::size_t i = lo; i < hi; ++i) box.grow(b.tri_box[b.index[i]]);
+      if (hi - lo == 1) {
+        set_slot(node, s, box, triangle_slot(b.index[lo]), true);
+      } else {
+        const std::uint32_t child = emit_triangles(lo, hi, depth + 1);
+        set_slot(node, s, box, child, false);
+      }
+    }
+    return node;
+  }
+
+  /// A node over the binary subtree `bnode`: open the largest binary children until four slots
+  /// are filled (a leaf opens into its triangles when they fit).
+  std::uint32_t emit(std::uint32_t bnode, int depth) {
+    const BinaryNode& root = b.bnodes[bnode];
+    if (root.leaf()) return emit_triangles(root.begin, root.end, depth);
+    max_depth = std::max(max_depth, depth);
+    auto as_item = [&](std::uint32_t id) {
+      const BinaryNode& n = b.bnodes[id];
+      if (n.leaf() && n.end - n.begin == 1) return Item{true, b.index[n.begin]};
+      return Item{false, id};
+    };
+    Item items[4];
+    int num = 0;
+    items[num++] = as_item(root.left);
+    items[num++] = as_item(root.right);
+    while (num < 4) {
+      int best = -1;
+      double best_area = -1.0;
+      for (int i = 0; i < num; ++i) {
+        if (items[i].is_triangle) continue;
+        const BinaryNode& n = b.bnodes[items[i].id];
+        const std::size_t grows = n.leaf() ? n.end - n.begin - 1 : 1;
+        if (static_cast<std::size_t>(num) + grows > 4) continue;
+        const double area = n.box.half_area();
+        if (area > best_area) {
+          best_area = area;
+          best = i;
+        }
+      }
+      if (best < 0) break;
+      const BinaryNode& n = b.bnodes[items[best].id];
+      if (n.leaf()) {
+        items[best] = Item{true, b.index[n.begin]};
+        for (std::size_t i = n.begin + 1; i < n.end; ++i) items[num++] = Item{true, b.index[i]};
+      } else {
+        const std::uint32_t r = n.right;
+        items[best] = as_item(n.left);
+        items[num++] = as_item(r);
+      }
+    }
+    const std::uint32_t node = new_node();
+    for (int s = 0; s < num; ++s) {
+      const Aabb box = box_of(items[s]);
+      if (items[s].is_triangle) {
+        set_slot(node, s, box, triangle_slot(items[s].id), true);
+      } else {
+        const std::uint32_t child = emit(items[s].id, depth + 1);
+        set_slot(node, s, box, child, false);
+      }
+    }
+    return node;
   }
 };
 
@@ -192,8 +332,8 @@ RayCaster::RayCaster(std::vector<Vector3d> vertices, std::vector<std::array<std:
               "RayCaster: settings.leaf_size " << settings.leaf_size << " outside [1, 255]");
   PLUMB_CHECK(settings.sah_bins >= 2 && settings.sah_bins <= 1024,
               "RayCaster: settings.sah_bins " << settings.sah_bins << " outside [2, 1024]");
-  PLUMB_CHECK(triangles_.size() < std::numeric_limits<std::uint32_t>::max(),
-              "RayCaster: " << triangles_.size() << " triangles exceed the 32-bit index");
+  PLUMB_CHECK(triangles_.size() < kTriangleBit,
+              "RayCaster: " << triangles_.size() << " triangles exceed the 31-bit index");
   if (triangle_element_.empty()) triangle_element_.assign(triangles_.size(), -1);
   PLUMB_CHECK(triangle_element_.size() == triangles_.size(),
               "RayCaster: triangle_element has " << triangle_element_.size() << " entries for "
@@ -218,8 +358,9 @@ void RayCaster::build(const RayCasterSettings& settings) {
   nodes_.clear();
   leaf_vertices_.clear();
   leaf_triangle_.clear();
+  depth_ = 0;
   if (n == 0) return;
-  Builder b{settings, {}, {}, {}, nodes_};
+  Builder b{settings, {}, {}, {}, {}};
   b.tri_box.resize(n);
   b.centroid.resize(n);
   b.index.resize(n);
@@ -230,18 +371,76 @@ void RayCaster::build(const RayCasterSettings& settings) {
     b.centroid[t] = 0.5 * (box.lo + box.hi);
     b.index[t] = static_cast<std::uint32_t>(t);
   }
-  nodes_.reserve(2 * n / static_cast<std::size_t>(settings.leaf_size) + 2);
-  nodes_.emplace_back();
+  b.bnodes.reserve(2 * n / static_cast<std::size_t>(settings.leaf_size) + 2);
+  b.bnodes.emplace_back();
   b.build(0, 0, n, 0);
-  leaf_triangle_ = std::move(b.index);
+
+  nodes_.reserve(b.bnodes.size() / 2 + 2);
+  leaf_triangle_.reserve(n);
+  Collapser c{b, nodes_, leaf_triangle_};
+  c.emit(0, 1);
+  depth_ = c.max_depth;
+  // Cannot fail (see kMaxTreeDepth); the traversal stack relies on it.
+  PLUMB_CHECK(depth_ <= kMaxTreeDepth, "RayCaster: BVH depth " << depth_ << " exceeds " << kMaxTreeDepth);
   leaf_vertices_.resize(9 * n);
   for (std::size_t i = 0; i < n; ++i) {
     const auto& tri = triangles_[leaf_triangle_[i]];
-    for (int k = 0; k < 3; ++k) {
-      for (int c = 0; c < 3; ++c) leaf_vertices_[9 * i + 3 * static_cast<std::size_t>(k) + static_cast<std::size_t>(c)] = vertices_[tri[static_cast<std::size_t>(k)]][c];
+    for (std::size_t k = 0; k < 3; ++k) {
+      for (std::size_t c3 = 0; c3 < 3; ++c3) {
+        leaf_vertices_[9 * i + 3 * k + c3] = vertices_[tri[k]][static_cast<Eigen::Index>(c3)];
+      }
     }
   }
 }
+
+namespace {
+
+/// Slab test of a ray against the four child boxes of a node. near_row[k] / far_row[k] select the
+/// lo or hi row of axis k by the sign of the direction. Returns a 4-bit mask of the slots hit and
+/// their entry distances.
+inline unsigned test_boxes(const RayCaster::Node& nd, const float org[3], const float inv[3], const int near_row[3],
+                           const int far_row[3], float t_far_limit, float t_near_out[4]) {
+  // Ize 2013: scale the far distance so float rounding cannot drop a box the ray touches.
+  constexpr float kFarScale = 1.0f + 4.0f * std::numeric_limits<float>::epsilon();
+#if defined(PLUMB_RAYCASTER_SSE2)
+  const __m128 ox = _mm_set1_ps(org[0]), oy = _mm_set1_ps(org[1]), oz = _mm_set1_ps(org[2]);
+  const __m128 ix = _mm_set1_ps(inv[0]), iy = _mm_set1_ps(inv[1]), iz = _mm_set1_ps(inv[2]);
+  const __m128 tx0 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd.bounds[near_row[0]]), ox), ix);
+  const __m128 tx1 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd.bounds[far_row[0]]), ox), ix);
+  const __m128 ty0 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd.bounds[near_row[1]]), oy), iy);
+  const __m128 ty1 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd.bounds[far_row[1]]), oy), iy);
+  const __m128 tz0 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd.bounds[near_row[2]]), oz), iz);
+  const __m128 tz1 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd.bounds[far_row[2]]), oz), iz);
+  const __m128 t0 = _mm_max_ps(_mm_max_ps(tx0, ty0), _mm_max_ps(tz0, _mm_setzero_ps()));
+  const __m128 t1 = _mm_mul_ps(_mm_min_ps(_mm_min_ps(tx1, ty1), _mm_min_ps(tz1, _mm_set1_ps(t_far_limit))),
+                               _mm_set1_ps(kFarScale));
+  _mm_storeu_ps(t_near_out, t0);
+  return static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(t0, t1)));
+#else
+  unsigned mask = 0;
+  for (int s = 0; s < 4; ++s) {
+    const float tx0 = (nd.bounds[near_row[0]][s] - org[0]) * inv[0];
+    const float tx1 = (nd.bounds[far_row[0]][s] - org[0]) * inv[0];
+    const float ty0 = (nd.bounds[near_row[1]][s] - org[1]) * inv[1];
+    const float ty1 = (nd.bounds[far_row[1]][s] - org[1]) * inv[1];
+    const float tz0 = (nd.bounds[near_row[2]][s] - org[2]) * inv[2];
+    const float tz1 = (nd.bounds[far_row[2]][s] - org[2]) * inv[2];
+    const float t0 = std::max(std::max(tx0, ty0), std::max(tz0, 0.0f));
+    const float t1 = std::min(std::min(tx1, ty1), std::min(tz1, t_far_limit)) * kFarScale;
+    t_near_out[s] = t0;
+    if (t0 <= t1) mask |= 1u << s;
+  }
+  return mask;
+#endif
+}
+
+/// A float at least as large as a positive double (infinity beyond the float range).
+inline float float_above(double x) {
+  if (!(x < 3e38)) return std::numeric_limits<float>::infinity();
+  return static_cast<float>(x) * (1.0f + 2.0f * std::numeric_limits<float>::epsilon());
+}
+
+}  // namespace
 
 template <bool kAnyHit>
 RayHit RayCaster::traverse(const Vector3d& origin, const Vector3d& dir, double t_max) const {
@@ -261,89 +460,89 @@ RayHit RayCaster::traverse(const Vector3d& origin, const Vector3d& dir, double t
   const double sz = 1.0 / dir[kz];
   const double ox = origin[kx], oy = origin[ky], oz = origin[kz];
 
-  // Box test set-up in float.
+  // Box test set-up in float: rows of the near and far planes by the sign of each component.
   float org[3], inv[3];
-  int near_idx[3];
+  int near_row[3], far_row[3];
   for (int k = 0; k < 3; ++k) {
     org[k] = static_cast<float>(origin[k]);
     const float d = static_cast<float>(dir[k]);
     inv[k] = 1.0f / (d != 0.0f ? d : std::copysign(1e-30f, d));
-    near_idx[k] = inv[k] >= 0.0f ? 0 : 1;
+    near_row[k] = 2 * k + (inv[k] >= 0.0f ? 0 : 1);
+    far_row[k] = 2 * k + (inv[k] >= 0.0f ? 1 : 0);
   }
-  // Ize 2013: scale the far distance so float rounding cannot drop a box the ray touches.
-  constexpr float kFarScale = 1.0f + 4.0f * std::numeric_limits<float>::epsilon();
   double best = t_max;
-  auto box_entry = [&](const Node& nd, float t_far_limit) -> float {
-    const float* lo = nd.lo;
-    const float* hi = nd.hi;
-    const float* bx[2] = {lo, hi};
-    const float tx0 = (bx[near_idx[0]][0] - org[0]) * inv[0];
-    const float tx1 = (bx[1 - near_idx[0]][0] - org[0]) * inv[0];
-    const float ty0 = (bx[near_idx[1]][1] - org[1]) * inv[1];
-    const float ty1 = (bx[1 - near_idx[1]][1] - org[1]) * inv[1];
-    const float tz0 = (bx[near_idx[2]][2] - org[2]) * inv[2];
-    const float tz1 = (bx[1 - near_idx[2]][2] - org[2]) * inv[2];
-    const float t0 = std::max(std::max(tx0, ty0), std::max(tz0, 0.0f));
-    const float t1 = std::min(std::min(tx1, ty1), std::min(tz1, t_far_limit)) * kFarScale;
-    return t0 <= t1 ? t0 : std::numeric_limits<float>::infinity();
-  };
-  auto far_limit = [&]() {
-    return best < 3e38 ? round_up(best) : std::numeric_limits<float>::infinity();
-  };
+  float best_f = float_above(best);
+  std::uint32_t best_slot = ~0u;
 
-  std::uint32_t best_leaf = ~0u;
-  if (box_entry(nodes_[0], far_limit()) == std::numeric_limits<float>::infinity()) return result;
   std::uint32_t stack_node[kStackSize];
   float stack_t[kStackSize];
   int sp = 0;
   std::uint32_t ni = 0;
   for (;;) {
     const Node& nd = nodes_[ni];
-    if (nd.count > 0) {
-      const double* v = leaf_vertices_.data() + 9 * static_cast<std::size_t>(nd.offset);
-      for (std::uint32_t i = 0; i < nd.count; ++i, v += 9) {
-        const double ax = v[kx] - ox, ay = v[ky] - oy, az = v[kz] - oz;
-        const double bx = v[3 + kx] - ox, by = v[3 + ky] - oy, bz = v[3 + kz] - oz;
-        const double cx = v[6 + kx] - ox, cy = v[6 + ky] - oy, cz = v[6 + kz] - oz;
-        const double Ax = ax - sx * az, Ay = ay - sy * az;
-        const double Bx = bx - sx * bz, By = by - sy * bz;
-        const double Cx = cx - sx * cz, Cy = cy - sy * cz;
-        const double U = Cx * By - Cy * Bx;
-        const double V = Ax * Cy - Ay * Cx;
-        const double W = Bx * Ay - By * Ax;
-        if ((U < 0.0 || V < 0.0 || W < 0.0) && (U > 0.0 || V > 0.0 || W > 0.0)) continue;
-        const double det = U + V + W;
-        if (det == 0.0) continue;
-        const double T = U * (sz * az) + V * (sz * bz) + W * (sz * cz);
-        const double t = T / det;
-        if (!(t > 0.0) || !(t < best)) continue;
-        best = t;
-        best_leaf = nd.offset + i;
-        if (kAnyHit) break;
+    alignas(16) float t_near[4];
+    const unsigned mask = test_boxes(nd, org, inv, near_row, far_row, best_f, t_near);
+    // Triangles first: the exact test (Woop et al. 2013, sec. 3) in double.
+    unsigned tri = mask & nd.triangle_mask;
+    while (tri != 0) {
+      const int s = __builtin_ctz(tri);
+      tri &= tri - 1;
+      const std::uint32_t slot = nd.child[s] & ~kTriangleBit;
+      const double* v = leaf_vertices_.data() + 9 * static_cast<std::size_t>(slot);
+      const double ax = v[kx] - ox, ay = v[ky] - oy, az = v[kz] - oz;
+      const double bx = v[3 + kx] - ox, by = v[3 + ky] - oy, bz = v[3 + kz] - oz;
+      const double cx = v[6 + kx] - ox, cy = v[6 + ky] - oy, cz = v[6 + kz] - oz;
+      const double Ax = ax - sx * az, Ay = ay - sy * az;
+      const double Bx = bx - sx * bz, By = by - sy * bz;
+      const double Cx = cx - sx * cz, Cy = cy - sy * cz;
+      const double U = Cx * By - Cy * Bx;
+      const double V = Ax * Cy - Ay * Cx;
+      const double W = Bx * Ay - By * Ax;
+      if ((U < 0.0 || V < 0.0 || W < 0.0) && (U > 0.0 || V > 0.0 || W > 0.0)) continue;
+      const double det = U + V + W;
+      if (det == 0.0) continue;
+      const double T = U * (sz * az) + V * (sz * bz) + W * (sz * cz);
+      const double t = T / det;
+      if (!(t > 0.0) || !(t < best)) continue;
+      best = t;
+      best_f = float_above(best);
+      best_slot = slot;
+      if (kAnyHit) break;
+    }
+    if (kAnyHit && best_slot != ~0u) break;
+    // Then the child nodes, nearest first; the others wait on the stack with their entry distance.
+    unsigned inner = mask & ~nd.triangle_mask;
+    int num = 0;
+    std::uint32_t child[4];
+    float entry[4];
+    while (inner != 0) {
+      const int s = __builtin_ctz(inner);
+      inner &= inner - 1;
+      if (!(t_near[s] <= best_f)) continue;
+      // Insertion into `child` sorted by decreasing entry distance.
+      int j = num++;
+      while (j > 0 && entry[j - 1] < t_near[s]) {
+        entry[j] = entry[j - 1];
+        child[j] = child[j - 1];
+        --j;
       }
-      if (kAnyHit && best_leaf != ~0u) break;
-    } else {
-      const float lim = far_limit();
-      const std::uint32_t l = ni + 1, r = nd.offset;
-      const float tl = box_entry(nodes_[l], lim);
-      const float tr = box_entry(nodes_[r], lim);
-      constexpr float kMiss = std::numeric_limits<float>::infinity();
-      if (tl != kMiss && tr != kMiss) {
-        const bool left_first = tl <= tr;
-        stack_node[sp] = left_first ? r : l;
-        stack_t[sp] = left_first ? tr : tl;
+      entry[j] = t_near[s];
+      child[j] = nd.child[s];
+    }
+    if (num > 0) {
+      for (int i = 0; i + 1 < num; ++i) {
+        stack_node[sp] = child[i];
+        stack_t[sp] = entry[i];
         ++sp;
-        ni = left_first ? l : r;
-        continue;
       }
-      if (tl != kMiss) { ni = l; continue; }
-      if (tr != kMiss) { ni = r; continue; }
+      ni = child[num - 1];
+      continue;
     }
     // Pop the next node still closer than the best hit.
     bool found = false;
     while (sp > 0) {
       --sp;
-      if (static_cast<double>(stack_t[sp]) <= best) {
+      if (stack_t[sp] <= best_f) {
         ni = stack_node[sp];
         found = true;
         break;
@@ -351,15 +550,15 @@ RayHit RayCaster::traverse(const Vector3d& origin, const Vector3d& dir, double t
     }
     if (!found) break;
   }
-  if (best_leaf == ~0u) return result;
-  const double* v = leaf_vertices_.data() + 9 * static_cast<std::size_t>(best_leaf);
+  if (best_slot == ~0u) return result;
+  const double* v = leaf_vertices_.data() + 9 * static_cast<std::size_t>(best_slot);
   const Vector3d p0(v[0], v[1], v[2]), p1(v[3], v[4], v[5]), p2(v[6], v[7], v[8]);
   Vector3d n = (p1 - p0).cross(p2 - p0);
   const double len = n.norm();
   n = len > 0.0 ? Vector3d(n / len) : Vector3d(-dir);
   if (n.dot(dir) > 0.0) n = -n;
   result.range = best;
-  result.triangle = leaf_triangle_[best_leaf];
+  result.triangle = leaf_triangle_[best_slot];
   result.element = triangle_element_[result.triangle];
   result.normal = n;
   return result;

@@ -31,16 +31,19 @@ struct RayHit {
 
 /// @brief Settings of the BVH build.
 struct RayCasterSettings {
-  int leaf_size = 4;  ///< triangles at which a node always becomes a leaf (>= 1)
-  int sah_bins = 16;  ///< bins per axis of the binned SAH split search (>= 2)
+  int leaf_size = 4;  ///< triangles at which a subtree of the binary SAH build always stops (1..255)
+  int sah_bins = 16;  ///< bins per axis of the binned SAH split search (2..1024)
 };
 
 /// @brief A static triangle mesh prepared for ray queries.
 ///
-/// The hierarchy is built once (binned SAH, O(n log n)); cast() walks it nearest child first and
-/// tests triangles with the watertight algorithm of Woop et al. (JCGT 2(1), 2013) in double
-/// precision, so a ray through an edge or vertex shared by triangles of a closed surface never
-/// slips between them. Both faces of a triangle are hit (no back-face culling).
+/// The hierarchy is built once with binned SAH (O(n log n)) and collapsed into a 4-wide BVH whose
+/// children are nodes or single triangles, so one SSE2 step tests four boxes (portable scalar code
+/// elsewhere). cast() walks it nearest child first and tests the triangles whose boxes the ray
+/// meets with the watertight algorithm of Woop et al. (JCGT 2(1), 2013) in double precision, so a
+/// ray through an edge or vertex shared by triangles of a closed surface never slips between them.
+/// The float boxes are rounded outward and padded, so they never cull a hit the exact test finds.
+/// Both faces of a triangle are hit (no back-face culling).
 /// @note cast() is const and keeps no state: it is safe to call from any number of threads.
 class RayCaster {
  public:
@@ -73,14 +76,15 @@ class RayCaster {
   /// @brief Number of BVH nodes (diagnostics).
   std::size_t num_nodes() const { return nodes_.size(); }
 
-  /// @brief A BVH node: bounds rounded outward to float; `count` = 0 for an inner node whose
-  /// children are this + 1 and `offset`, else a leaf of `count` triangles from `offset`.
-  struct Node {
-    float lo[3];
-    float hi[3];
-    std::uint32_t offset;
-    std::uint32_t count;
+  /// @brief A 4-wide BVH node: the bounds of its four child slots in float, rounded outward.
+  struct alignas(64) Node {
+    float bounds[6][4];        ///< rows lo x, hi x, lo y, hi y, lo z, hi z; an empty slot has lo > hi
+    std::uint32_t child[4];    ///< node index, or kTriangleBit | leaf slot of a triangle
+    std::uint32_t num_children;  ///< slots in use
+    std::uint32_t triangle_mask;  ///< bit i set: slot i is a triangle
+    std::uint32_t unused[2];
   };
+  static constexpr std::uint32_t kTriangleBit = 0x80000000u;
 
  private:
   template <bool kAnyHit>
@@ -93,6 +97,7 @@ class RayCaster {
   std::vector<Node> nodes_;
   std::vector<double> leaf_vertices_;       ///< 9 doubles per triangle, in leaf order
   std::vector<std::uint32_t> leaf_triangle_;  ///< original triangle index, in leaf order
+  int depth_ = 0;                             ///< levels of the 4-wide tree
 };
 
 }  // namespace plumb::sim
