@@ -236,17 +236,16 @@ struct Collapser {
     return RayCaster::kTriangleBit | static_cast<std::uint32_t>(leaf_triangle.size() - 1);
   }
 
-  /// A node over the triangles index[begin, end): four groups along the longest centroid axis.
-  std::uint32_t emit_triangles(std::size_t begin, std::size_t end, int depth) {
+  /// Fill `node` with the triangles index[begin, end): four groups along the longest centroid axis.
+  void emit_triangles(std::uint32_t node, std::size_t begin, std::size_t end, int depth) {
     max_depth = std::max(max_depth, depth);
-    const std::uint32_t node = new_node();
     const std::size_t count = end - begin;
     if (count <= 4) {
       for (std::size_t i = begin; i < end; ++i) {
         const std::uint32_t t = b.index[i];
         set_slot(node, static_cast<int>(i - begin), b.tri_box[t], triangle_slot(t), true);
       }
-      return node;
+      return;
     }
     Aabb cbox;
     for (std::size_t i = begin; i < end; ++i) cbox.grow(b.centroid[b.index[i]]);
@@ -254,26 +253,33 @@ struct Collapser {
     (cbox.hi - cbox.lo).maxCoeff(&axis);
     std::sort(b.index.begin() + static_cast<std::ptrdiff_t>(begin), b.index.begin() + static_cast<std::ptrdiff_t>(end),
               [&](std::uint32_t x, std::uint32_t y) { return b.centroid[x][axis] < b.centroid[y][axis]; });
-    for (int s = 0; s < 4; ++s) {
-      const std::size_t lo = begin + count * static_cast<std::size_t>(s) / 4;
-      const std::size_t hi = begin + count * static_cast<std::size_t>(s + 1) / 4;
+    std::uint32_t child[4] = {~0u, ~0u, ~0u, ~0u};
+    std::size_t lo[4], hi[4];
+    for (int s = 0; s < 4; ++s) {  // the child nodes first, side by side in memory
+      lo[s] = begin + count * static_cast<std::size_t>(s) / 4;
+      hi[s] = begin + count * static_cast<std::size_t>(s + 1) / 4;
       Aabb box;
-      for (std::size_t i = lo; i < hi; ++i) box.grow(b.tri_box[b.index[i]]);
-      if (hi - lo == 1) {
-        set_slot(node, s, box, triangle_slot(b.index[lo]), true);
+      for (std::size_t i = lo[s]; i < hi[s]; ++i) box.grow(b.tri_box[b.index[i]]);
+      if (hi[s] - lo[s] == 1) {
+        set_slot(node, s, box, triangle_slot(b.index[lo[s]]), true);
       } else {
-        const std::uint32_t child = emit_triangles(lo, hi, depth + 1);
-        set_slot(node, s, box, child, false);
+        child[s] = new_node();
+        set_slot(node, s, box, child[s], false);
       }
     }
-    return node;
+    for (int s = 0; s < 4; ++s) {
+      if (child[s] != ~0u) emit_triangles(child[s], lo[s], hi[s], depth + 1);
+    }
   }
 
-  /// A node over the binary subtree `bnode`: open the largest binary children until four slots
-  /// are filled (a leaf opens into its triangles when they fit).
-  std::uint32_t emit(std::uint32_t bnode, int depth) {
+  /// Fill `node` from the binary subtree `bnode`: open the largest binary children until four
+  /// slots are filled (a leaf opens into its triangles when they fit).
+  void emit(std::uint32_t node, std::uint32_t bnode, int depth) {
     const BinaryNode& root = b.bnodes[bnode];
-    if (root.leaf()) return emit_triangles(root.begin, root.end, depth);
+    if (root.leaf()) {
+      emit_triangles(node, root.begin, root.end, depth);
+      return;
+    }
     max_depth = std::max(max_depth, depth);
     auto as_item = [&](std::uint32_t id) {
       const BinaryNode& n = b.bnodes[id];
@@ -309,17 +315,19 @@ struct Collapser {
         items[num++] = as_item(r);
       }
     }
-    const std::uint32_t node = new_node();
-    for (int s = 0; s < num; ++s) {
+    std::uint32_t child[4] = {~0u, ~0u, ~0u, ~0u};
+    for (int s = 0; s < num; ++s) {  // the child nodes first, side by side in memory
       const Aabb box = box_of(items[s]);
       if (items[s].is_triangle) {
         set_slot(node, s, box, triangle_slot(items[s].id), true);
       } else {
-        const std::uint32_t child = emit(items[s].id, depth + 1);
-        set_slot(node, s, box, child, false);
+        child[s] = new_node();
+        set_slot(node, s, box, child[s], false);
       }
     }
-    return node;
+    for (int s = 0; s < num; ++s) {
+      if (child[s] != ~0u) emit(child[s], items[s].id, depth + 1);
+    }
   }
 };
 
@@ -378,7 +386,7 @@ void RayCaster::build(const RayCasterSettings& settings) {
   nodes_.reserve(b.bnodes.size() / 2 + 2);
   leaf_triangle_.reserve(n);
   Collapser c{b, nodes_, leaf_triangle_};
-  c.emit(0, 1);
+  c.emit(c.new_node(), 0, 1);
   depth_ = c.max_depth;
   // Cannot fail (see kMaxTreeDepth); the traversal stack relies on it.
   PLUMB_CHECK(depth_ <= kMaxTreeDepth, "RayCaster: BVH depth " << depth_ << " exceeds " << kMaxTreeDepth);
@@ -395,40 +403,48 @@ void RayCaster::build(const RayCasterSettings& settings) {
 
 namespace {
 
-/// Slab test of a ray against the four child boxes of a node. near_row[k] / far_row[k] select the
-/// lo or hi row of axis k by the sign of the direction. Returns a 4-bit mask of the slots hit and
-/// their entry distances.
-inline unsigned test_boxes(const RayCaster::Node& nd, const float org[3], const float inv[3], const int near_row[3],
-                           const int far_row[3], float t_far_limit, float t_near_out[4]) {
+/// The ray as the box test needs it: float origin and inverse direction, and the rows of the near
+/// and far planes of each axis chosen by the sign of the direction.
+struct BoxRay {
+#if defined(PLUMB_RAYCASTER_SSE2)
+  __m128 org[3];
+  __m128 inv[3];
+#else
+  float org[3];
+  float inv[3];
+#endif
+  int near_row[3];
+  int far_row[3];
+};
+
+/// Slab test of a ray against the four child boxes of a node (Kay-Kajiya). Returns a 4-bit mask
+/// of the slots hit before `t_far_limit` and writes their entry distances.
+inline unsigned test_boxes(const RayCaster::Node& nd, const BoxRay& r, float t_far_limit, float t_near_out[4]) {
   // Ize 2013: scale the far distance so float rounding cannot drop a box the ray touches.
   constexpr float kFarScale = 1.0f + 4.0f * std::numeric_limits<float>::epsilon();
 #if defined(PLUMB_RAYCASTER_SSE2)
-  const __m128 ox = _mm_set1_ps(org[0]), oy = _mm_set1_ps(org[1]), oz = _mm_set1_ps(org[2]);
-  const __m128 ix = _mm_set1_ps(inv[0]), iy = _mm_set1_ps(inv[1]), iz = _mm_set1_ps(inv[2]);
-  const __m128 tx0 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd.bounds[near_row[0]]), ox), ix);
-  const __m128 tx1 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd.bounds[far_row[0]]), ox), ix);
-  const __m128 ty0 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd.bounds[near_row[1]]), oy), iy);
-  const __m128 ty1 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd.bounds[far_row[1]]), oy), iy);
-  const __m128 tz0 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd.bounds[near_row[2]]), oz), iz);
-  const __m128 tz1 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd.bounds[far_row[2]]), oz), iz);
+  const __m128 tx0 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd.bounds[r.near_row[0]]), r.org[0]), r.inv[0]);
+  const __m128 tx1 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd.bounds[r.far_row[0]]), r.org[0]), r.inv[0]);
+  const __m128 ty0 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd.bounds[r.near_row[1]]), r.org[1]), r.inv[1]);
+  const __m128 ty1 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd.bounds[r.far_row[1]]), r.org[1]), r.inv[1]);
+  const __m128 tz0 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd.bounds[r.near_row[2]]), r.org[2]), r.inv[2]);
+  const __m128 tz1 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd.bounds[r.far_row[2]]), r.org[2]), r.inv[2]);
   const __m128 t0 = _mm_max_ps(_mm_max_ps(tx0, ty0), _mm_max_ps(tz0, _mm_setzero_ps()));
   const __m128 t1 = _mm_mul_ps(_mm_min_ps(_mm_min_ps(tx1, ty1), _mm_min_ps(tz1, _mm_set1_ps(t_far_limit))),
                                _mm_set1_ps(kFarScale));
-  _mm_storeu_ps(t_near_out, t0);
+  _mm_store_ps(t_near_out, t0);
   return static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(t0, t1)));
 #else
   unsigned mask = 0;
   for (int s = 0; s < 4; ++s) {
-    const float tx0 = (nd.bounds[near_row[0]][s] - org[0]) * inv[0];
-    const float tx1 = (nd.bounds[far_row[0]][s] - org[0]) * inv[0];
-    const float ty0 = (nd.bounds[near_row[1]][s] - org[1]) * inv[1];
-    const float ty1 = (nd.bounds[far_row[1]][s] - org[1]) * inv[1];
-    const float tz0 = (nd.bounds[near_row[2]][s] - org[2]) * inv[2];
-    const float tz1 = (nd.bounds[far_row[2]][s] - org[2]) * inv[2];
-    const float t0 = std::max(std::max(tx0, ty0), std::max(tz0, 0.0f));
-    const float t1 = std::min(std::min(tx1, ty1), std::min(tz1, t_far_limit)) * kFarScale;
+    float t0 = 0.0f;
+    float t1 = t_far_limit;
+    for (int k = 0; k < 3; ++k) {
+      t0 = std::max(t0, (nd.bounds[r.near_row[k]][s] - r.org[k]) * r.inv[k]);
+      t1 = std::min(t1, (nd.bounds[r.far_row[k]][s] - r.org[k]) * r.inv[k]);
+    }
     t_near_out[s] = t0;
-    if (t0 <= t1) mask |= 1u << s;
+    if (t0 <= t1 * kFarScale) mask |= 1u << s;
   }
   return mask;
 #endif
@@ -461,14 +477,20 @@ RayHit RayCaster::traverse(const Vector3d& origin, const Vector3d& dir, double t
   const double ox = origin[kx], oy = origin[ky], oz = origin[kz];
 
   // Box test set-up in float: rows of the near and far planes by the sign of each component.
-  float org[3], inv[3];
-  int near_row[3], far_row[3];
+  BoxRay box_ray;
   for (int k = 0; k < 3; ++k) {
-    org[k] = static_cast<float>(origin[k]);
+    const float o = static_cast<float>(origin[k]);
     const float d = static_cast<float>(dir[k]);
-    inv[k] = 1.0f / (d != 0.0f ? d : std::copysign(1e-30f, d));
-    near_row[k] = 2 * k + (inv[k] >= 0.0f ? 0 : 1);
-    far_row[k] = 2 * k + (inv[k] >= 0.0f ? 1 : 0);
+    const float inv = 1.0f / (d != 0.0f ? d : std::copysign(1e-30f, d));
+#if defined(PLUMB_RAYCASTER_SSE2)
+    box_ray.org[k] = _mm_set1_ps(o);
+    box_ray.inv[k] = _mm_set1_ps(inv);
+#else
+    box_ray.org[k] = o;
+    box_ray.inv[k] = inv;
+#endif
+    box_ray.near_row[k] = 2 * k + (inv >= 0.0f ? 0 : 1);
+    box_ray.far_row[k] = 2 * k + (inv >= 0.0f ? 1 : 0);
   }
   double best = t_max;
   float best_f = float_above(best);
@@ -481,7 +503,7 @@ RayHit RayCaster::traverse(const Vector3d& origin, const Vector3d& dir, double t
   for (;;) {
     const Node& nd = nodes_[ni];
     alignas(16) float t_near[4];
-    const unsigned mask = test_boxes(nd, org, inv, near_row, far_row, best_f, t_near);
+    const unsigned mask = test_boxes(nd, box_ray, best_f, t_near);
     // Triangles first: the exact test (Woop et al. 2013, sec. 3) in double.
     unsigned tri = mask & nd.triangle_mask;
     while (tri != 0) {
@@ -512,31 +534,44 @@ RayHit RayCaster::traverse(const Vector3d& origin, const Vector3d& dir, double t
     if (kAnyHit && best_slot != ~0u) break;
     // Then the child nodes, nearest first; the others wait on the stack with their entry distance.
     unsigned inner = mask & ~nd.triangle_mask;
-    int num = 0;
-    std::uint32_t child[4];
-    float entry[4];
-    while (inner != 0) {
-      const int s = __builtin_ctz(inner);
+    if (inner != 0) {
+      const int s0 = __builtin_ctz(inner);
       inner &= inner - 1;
-      if (!(t_near[s] <= best_f)) continue;
-      // Insertion into `child` sorted by decreasing entry distance.
-      int j = num++;
-      while (j > 0 && entry[j - 1] < t_near[s]) {
-        entry[j] = entry[j - 1];
-        child[j] = child[j - 1];
-        --j;
+      if (inner == 0) {  // one child: the common case
+        if (t_near[s0] <= best_f) {
+          ni = nd.child[s0];
+          continue;
+        }
+      } else {
+        int num = 0;
+        std::uint32_t child[4];
+        float entry[4];
+        for (int s = s0;;) {
+          if (t_near[s] <= best_f) {
+            // Insertion into `child` sorted by decreasing entry distance.
+            int j = num++;
+            while (j > 0 && entry[j - 1] < t_near[s]) {
+              entry[j] = entry[j - 1];
+              child[j] = child[j - 1];
+              --j;
+            }
+            entry[j] = t_near[s];
+            child[j] = nd.child[s];
+          }
+          if (inner == 0) break;
+          s = __builtin_ctz(inner);
+          inner &= inner - 1;
+        }
+        if (num > 0) {
+          for (int i = 0; i + 1 < num; ++i) {
+            stack_node[sp] = child[i];
+            stack_t[sp] = entry[i];
+            ++sp;
+          }
+          ni = child[num - 1];
+          continue;
+        }
       }
-      entry[j] = t_near[s];
-      child[j] = nd.child[s];
-    }
-    if (num > 0) {
-      for (int i = 0; i + 1 < num; ++i) {
-        stack_node[sp] = child[i];
-        stack_t[sp] = entry[i];
-        ++sp;
-      }
-      ni = child[num - 1];
-      continue;
     }
     // Pop the next node still closer than the best hit.
     bool found = false;

@@ -32,7 +32,7 @@ struct RayHit {
 /// @brief Settings of the BVH build.
 struct RayCasterSettings {
   int leaf_size = 4;  ///< triangles at which a subtree of the binary SAH build always stops (1..255)
-  int sah_bins = 16;  ///< bins per axis of the binned SAH split search (2..1024)
+  int sah_bins = 32;  ///< bins per axis of the binned SAH split search (2..1024)
 };
 
 /// @brief A static triangle mesh prepared for ray queries.
