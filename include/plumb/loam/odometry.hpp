@@ -42,6 +42,9 @@ struct LoamSettings {
   int map_neighbors = 5;             ///< neighbours fitted per query (plane PCA, edge direction), >= 3
   double map_plane_tolerance = 0.2;  ///< every neighbour must be within this of the fitted plane [m]
   double map_edge_ratio = 3.0;       ///< an edge needs largest / second eigenvalue >= this
+  /// A plane needs second / smallest eigenvalue >= this: neighbours along one scan line (nearly
+  /// collinear, e.g. a ring of ground returns seen from a standing sensor) fix no normal.
+  double map_plane_ratio = 10.0;
 };
 
 /// @brief Result of the LOAM scan matchers.
@@ -59,6 +62,17 @@ struct LoamResult {
   /// Smallest eigenvalue of J^T J / num_residuals at the last iteration (unweighted, translation
   /// [m] and rotation [rad] mixed as in delta). Near 0: a direction the features do not constrain.
   double degeneracy = 0.0;
+};
+
+/// @brief One LiDAR residual with its model fixed for a solver step: query point `p` (current
+///        frame), anchor `a` (target frame) and the line direction (edge, eq. 6) or plane normal
+///        (plane, eq. 7) `dir`; a point-to-point pair (eq. 20) has `dir` zero and `a` the target point.
+struct LoamCorrespondence {
+  enum class Kind { kEdge, kPlane, kPoint };
+  Kind kind = Kind::kPlane;
+  Vector3d p = Vector3d::Zero();    ///< query point, current frame [m]
+  Vector3d a = Vector3d::Zero();    ///< anchor on the line / plane, or the matched point, target frame [m]
+  Vector3d dir = Vector3d::Zero();  ///< unit line direction (edge) or unit normal (plane)
 };
 
 /// @brief A local feature map for scan-to-map matching: edge and plane points in the map frame,
@@ -103,6 +117,23 @@ inline LoamResult loam_scan_to_scan(const LoamFeatures& prev, const LoamFeatures
 inline LoamResult loam_scan_to_map(const LoamMap& map, const LoamFeatures& cur,
                                    const Eigen::Isometry3d& T_map_cur_guess,
                                    const LoamSettings& settings = {});
+
+/// @brief The association step of loam_scan_to_map() on its own, for an outside solver (the
+///        LiDAR/IMU estimator): the current frame's edges, edge candidates, planes and plane
+///        candidates transformed by `T_map_cur`, each matched to a line / plane fitted to its
+///        `map_neighbors` nearest map points (only max_correspondence_distance, map_neighbors,
+///        map_plane_tolerance and map_edge_ratio of `settings` are used).
+/// @param out receives the correspondences (appended)
+/// @note Deterministic; const on the map, so several threads may associate against one map.
+inline void loam_associate_map(const LoamMap& map, const LoamFeatures& cur, const Eigen::Isometry3d& T_map_cur,
+                               const LoamSettings& settings, std::vector<LoamCorrespondence>& out);
+
+/// @brief The association step of loam_icp_scan_to_scan() on its own: each finite point of `cur`
+///        transformed by `T_target_cur` paired with its nearest target point within
+///        `max_correspondence_distance` [m] (appended to `out`).
+inline void loam_associate_points(const PointCloud& target, const KdTree3f& target_tree, const PointCloud& cur,
+                                  const Eigen::Isometry3d& T_target_cur, double max_correspondence_distance,
+                                  std::vector<LoamCorrespondence>& out);
 
 /// @brief Point-to-point ICP (SEEDS eq. 20) with the same solver: each point of `cur` against its
 ///        nearest point of `prev` within max_correspondence_distance (the hybrid switch's matcher

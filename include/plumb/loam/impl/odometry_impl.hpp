@@ -17,15 +17,7 @@ namespace plumb {
 
 namespace loam_detail {
 
-/// One residual with its model fixed for an LM step: query p (current frame), anchor a, and the
-/// line direction (edge) / plane normal (plane) `dir`.
-struct Factor {
-  enum class Kind { kEdge, kPlane, kPoint };
-  Kind kind;
-  Vector3d p;
-  Vector3d a;
-  Vector3d dir;
-};
+using Factor = LoamCorrespondence;
 
 struct FactorCounts {
   std::size_t edge = 0, plane = 0, point = 0;
@@ -108,6 +100,8 @@ inline void check_settings(const LoamSettings& s, const Eigen::Isometry3d& guess
               where << ": map_plane_tolerance must be > 0");
   PLUMB_CHECK(std::isfinite(s.map_edge_ratio) && s.map_edge_ratio >= 1.0,
               where << ": map_edge_ratio must be >= 1");
+  PLUMB_CHECK(std::isfinite(s.map_plane_ratio) && s.map_plane_ratio >= 1.0,
+              where << ": map_plane_ratio must be >= 1");
 }
 
 /// The shared solver: per round, associate at T (fills factors), then one LM step (the damping
@@ -308,66 +302,95 @@ inline LoamResult loam_scan_to_scan(const LoamFeatures& prev, const LoamFeatures
   return loam_detail::solve_se3(T_prev_cur_guess, settings, associate);
 }
 
+inline void loam_associate_map(const LoamMap& map, const LoamFeatures& cur, const Eigen::Isometry3d& T,
+                               const LoamSettings& settings, std::vector<LoamCorrespondence>& factors) {
+  using loam_detail::Factor;
+  PLUMB_CHECK(settings.map_neighbors >= 3, "loam_associate_map: map_neighbors must be >= 3, got " << settings.map_neighbors);
+  const float max_sq = static_cast<float>(settings.max_correspondence_distance * settings.max_correspondence_distance);
+  const std::size_t k = static_cast<std::size_t>(settings.map_neighbors);
+  const Eigen::Matrix3f R = T.linear().cast<float>();
+  const Eigen::Vector3f t = T.translation().cast<float>();
+  std::size_t idx[64];
+  float d[64];
+  const std::size_t kk = std::min<std::size_t>(k, 64);
+  // Mean and covariance of the k neighbours, or false when one is too far.
+  auto fit = [&](const KdTree3f& tree, const PointCloud& cloud, const Vector3f& q, Vector3d& mean,
+                 Eigen::SelfAdjointEigenSolver<Matrix3d>& eig) {
+    const std::size_t found = tree.knn(q, kk, idx, d);
+    if (found < kk || d[found - 1] > max_sq) return false;
+    mean.setZero();
+    for (std::size_t i = 0; i < found; ++i) mean += cloud.points[idx[i]].cast<double>();
+    mean /= static_cast<double>(found);
+    Matrix3d C = Matrix3d::Zero();
+    for (std::size_t i = 0; i < found; ++i) {
+      const Vector3d e = cloud.points[idx[i]].cast<double>() - mean;
+      C += e * e.transpose();
+    }
+    eig.computeDirect(C / static_cast<double>(found));
+    return true;
+  };
+  Vector3d mean;
+  Eigen::SelfAdjointEigenSolver<Matrix3d> eig;
+  auto add_edges = [&](const PointCloud& queries) {
+    if (!map.edge_tree()) return;
+    for (const Vector3f& p : queries.points) {
+      if (!p.allFinite()) continue;
+      if (!fit(*map.edge_tree(), map.edges(), R * p + t, mean, eig)) continue;
+      const Vector3d ev = eig.eigenvalues();  // ascending
+      if (!(ev(2) > 0.0) || ev(2) < settings.map_edge_ratio * ev(1)) continue;
+      factors.push_back({Factor::Kind::kEdge, p.cast<double>(), mean, eig.eigenvectors().col(2).normalized()});
+    }
+  };
+  auto add_planes = [&](const PointCloud& queries) {
+    if (!map.plane_tree()) return;
+    for (const Vector3f& p : queries.points) {
+      if (!p.allFinite()) continue;
+      if (!fit(*map.plane_tree(), map.planes(), R * p + t, mean, eig)) continue;
+      const Vector3d ev = eig.eigenvalues();  // ascending
+      if (!(ev(1) > 0.0) || ev(1) < settings.map_plane_ratio * ev(0)) continue;
+      const Vector3d n = eig.eigenvectors().col(0).normalized();
+      bool flat = true;
+      for (std::size_t i = 0; i < kk && flat; ++i) {
+        flat = std::abs(n.dot(map.planes().points[idx[i]].cast<double>() - mean)) <= settings.map_plane_tolerance;
+      }
+      if (!flat) continue;
+      factors.push_back({Factor::Kind::kPlane, p.cast<double>(), mean, n});
+    }
+  };
+  add_edges(cur.edges);
+  add_edges(cur.edge_candidates);
+  add_planes(cur.planes);
+  add_planes(cur.plane_candidates);
+}
+
 inline LoamResult loam_scan_to_map(const LoamMap& map, const LoamFeatures& cur,
                                    const Eigen::Isometry3d& T_map_cur_guess, const LoamSettings& settings) {
   using loam_detail::Factor;
   loam_detail::check_settings(settings, T_map_cur_guess, "loam_scan_to_map");
-  const float max_sq = static_cast<float>(settings.max_correspondence_distance * settings.max_correspondence_distance);
-  const std::size_t k = static_cast<std::size_t>(settings.map_neighbors);
-
+  PLUMB_CHECK(settings.map_neighbors <= 64, "loam_scan_to_map: map_neighbors must be <= 64, got " << settings.map_neighbors);
   auto associate = [&](const Eigen::Isometry3d& T, std::vector<Factor>& factors) {
-    const Eigen::Matrix3f R = T.linear().cast<float>();
-    const Eigen::Vector3f t = T.translation().cast<float>();
-    std::vector<std::size_t> idx(k);
-    std::vector<float> d(k);
-    // Mean and covariance of the k neighbours, or false when one is too far.
-    auto fit = [&](const KdTree3f& tree, const PointCloud& cloud, const Vector3f& q, Vector3d& mean,
-                   Eigen::SelfAdjointEigenSolver<Matrix3d>& eig) {
-      const std::size_t found = tree.knn(q, k, idx.data(), d.data());
-      if (found < k || d[found - 1] > max_sq) return false;
-      mean.setZero();
-      for (std::size_t i = 0; i < found; ++i) mean += cloud.points[idx[i]].cast<double>();
-      mean /= static_cast<double>(found);
-      Matrix3d C = Matrix3d::Zero();
-      for (std::size_t i = 0; i < found; ++i) {
-        const Vector3d e = cloud.points[idx[i]].cast<double>() - mean;
-        C += e * e.transpose();
-      }
-      eig.compute(C / static_cast<double>(found));
-      return true;
-    };
-    Vector3d mean;
-    Eigen::SelfAdjointEigenSolver<Matrix3d> eig;
-    auto add_edges = [&](const PointCloud& queries) {
-      if (!map.edge_tree()) return;
-      for (const Vector3f& p : queries.points) {
-        if (!p.allFinite()) continue;
-        if (!fit(*map.edge_tree(), map.edges(), R * p + t, mean, eig)) continue;
-        const Vector3d ev = eig.eigenvalues();  // ascending
-        if (!(ev(2) > 0.0) || ev(2) < settings.map_edge_ratio * ev(1)) continue;
-        factors.push_back({Factor::Kind::kEdge, p.cast<double>(), mean, eig.eigenvectors().col(2)});
-      }
-    };
-    auto add_planes = [&](const PointCloud& queries) {
-      if (!map.plane_tree()) return;
-      for (const Vector3f& p : queries.points) {
-        if (!p.allFinite()) continue;
-        if (!fit(*map.plane_tree(), map.planes(), R * p + t, mean, eig)) continue;
-        const Vector3d n = eig.eigenvectors().col(0);
-        bool flat = true;
-        for (std::size_t i = 0; i < k && flat; ++i) {
-          flat = std::abs(n.dot(map.planes().points[idx[i]].cast<double>() - mean)) <= settings.map_plane_tolerance;
-        }
-        if (!flat) continue;
-        factors.push_back({Factor::Kind::kPlane, p.cast<double>(), mean, n});
-      }
-    };
-    add_edges(cur.edges);
-    add_edges(cur.edge_candidates);
-    add_planes(cur.planes);
-    add_planes(cur.plane_candidates);
+    loam_associate_map(map, cur, T, settings, factors);
   };
   return loam_detail::solve_se3(T_map_cur_guess, settings, associate);
+}
+
+inline void loam_associate_points(const PointCloud& prev, const KdTree3f& prev_tree, const PointCloud& cur,
+                                  const Eigen::Isometry3d& T, double max_correspondence_distance,
+                                  std::vector<LoamCorrespondence>& factors) {
+  using loam_detail::Factor;
+  PLUMB_CHECK(prev_tree.num_input_points() == prev.size(),
+              "loam_associate_points: the kd-tree was built on " << prev_tree.num_input_points()
+                  << " points but the target cloud has " << prev.size());
+  const float max_sq = static_cast<float>(max_correspondence_distance * max_correspondence_distance);
+  const Eigen::Matrix3f R = T.linear().cast<float>();
+  const Eigen::Vector3f t = T.translation().cast<float>();
+  for (const Vector3f& p : cur.points) {
+    if (!p.allFinite()) continue;
+    const auto nb = prev_tree.nearest(R * p + t, max_sq);
+    if (!nb) continue;
+    factors.push_back({Factor::Kind::kPoint, p.cast<double>(), prev.points[nb->index].cast<double>(),
+                       Vector3d::Zero()});
+  }
 }
 
 inline LoamResult loam_icp_scan_to_scan(const PointCloud& prev, const KdTree3f& prev_tree,
@@ -378,17 +401,8 @@ inline LoamResult loam_icp_scan_to_scan(const PointCloud& prev, const KdTree3f& 
   PLUMB_CHECK(prev_tree.num_input_points() == prev.size(),
               "loam_icp_scan_to_scan: the kd-tree was built on " << prev_tree.num_input_points()
                   << " points but the previous cloud has " << prev.size());
-  const float max_sq = static_cast<float>(settings.max_correspondence_distance * settings.max_correspondence_distance);
   auto associate = [&](const Eigen::Isometry3d& T, std::vector<Factor>& factors) {
-    const Eigen::Matrix3f R = T.linear().cast<float>();
-    const Eigen::Vector3f t = T.translation().cast<float>();
-    for (const Vector3f& p : cur.points) {
-      if (!p.allFinite()) continue;
-      const auto nb = prev_tree.nearest(R * p + t, max_sq);
-      if (!nb) continue;
-      factors.push_back({Factor::Kind::kPoint, p.cast<double>(), prev.points[nb->index].cast<double>(),
-                         Vector3d::Zero()});
-    }
+    loam_associate_points(prev, prev_tree, cur, T, settings.max_correspondence_distance, factors);
   };
   return loam_detail::solve_se3(T_prev_cur_guess, settings, associate);
 }
