@@ -6,7 +6,6 @@
 ///        RANSAC: a voxel-grid sample with PCA normals (SEEDS A2.2 steps 1-2). Full-resolution
 ///        points are labelled afterwards by their distance to the planes found on the sample.
 
-#include <chrono>
 #include <cmath>
 #include <cstddef>
 #include <limits>
@@ -52,63 +51,17 @@ struct FrameSample {
 };
 
 /// @brief Voxel-grid sample of `cloud` with PCA normals (features/normals.hpp).
+///
+/// The sample is exactly voxel_grid(cloud, {voxel_size, kNearestToCentroid}) (grid anchored at the
+/// finite points' bounding-box minimum, ascending voxel-key order, ties to the lowest index), taken
+/// from the coordinates alone: no copy of the cloud or of its other fields.
 /// @param cloud a frame in the sensor frame (origin = sensor, z up); non-finite points skipped
 /// @return the sample; kInsufficientData (and an empty sample) when fewer than 3 points are finite
 /// @throws plumb::Error on invalid settings or a cloud whose optional fields are inconsistent
-inline FrameSample sample_frame(const PointCloud& cloud, const FrameSampleSettings& settings = {}) {
-  const auto t0 = std::chrono::steady_clock::now();
-  PLUMB_CHECK(std::isfinite(settings.voxel_size) && settings.voxel_size > 0.0,
-              "sample_frame: voxel_size = " << settings.voxel_size << " must be finite and > 0");
-  PLUMB_CHECK(settings.normal_k >= 3, "sample_frame: normal_k = " << settings.normal_k << " must be >= 3");
-  PLUMB_CHECK(!std::isnan(settings.normal_max_z), "sample_frame: normal_max_z is NaN");
-  cloud.check_consistent("sample_frame");
-  FrameSample out;
-  out.voxel_size = settings.voxel_size;
-  for (const Vector3f& p : cloud.points) out.num_finite += p.allFinite() ? 1 : 0;
-  if (out.num_finite >= 3) {
-    // Only the coordinates matter here: sample a points-only view of the cloud.
-    PointCloud xyz;
-    const PointCloud* source = &cloud;
-    if (cloud.has_normals() || cloud.has_intensities() || cloud.has_rings() || cloud.has_times() ||
-        cloud.has_labels()) {
-      xyz.points = cloud.points;
-      source = &xyz;
-    }
-    VoxelGridSettings vs;
-    vs.leaf_size = settings.voxel_size;
-    VoxelGridResult v = voxel_grid(*source, vs);
-    out.points = std::move(v.cloud.points);
-    out.source = std::move(v.indices);
-    if (out.points.size() >= 3) {
-      const KdTree<3> tree(out.points);
-      NormalSettings ns;
-      ns.k = settings.normal_k;
-      ns.radius = settings.normal_radius;
-      ns.viewpoint = settings.viewpoint;
-      ns.orient_to_viewpoint = true;
-      if (std::isinf(settings.normal_max_z) && settings.normal_max_z > 0.0f) {
-        out.normals = estimate_normals(out.points, tree, out.points, ns).normals;
-      } else {
-        std::vector<Vector3f> queries;
-        std::vector<std::size_t> where;
-        for (std::size_t i = 0; i < out.points.size(); ++i) {
-          if (out.points[i].z() <= settings.normal_max_z) {
-            queries.push_back(out.points[i]);
-            where.push_back(i);
-          }
-        }
-        out.normals.assign(out.points.size(), Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
-        const NormalResult nr = estimate_normals(queries, tree, out.points, ns);
-        for (std::size_t j = 0; j < where.size(); ++j) out.normals[where[j]] = nr.normals[j];
-      }
-      out.status = Status::kOk;
-    } else {
-      out.points.clear();
-      out.source.clear();
-    }
-  }
-  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return out;
-}
+/// @note O(n) for the n input points (radix sort of the voxel keys), then O(m k log m) for the
+///       normals of the m sample points, which dominate. One thread, deterministic.
+FrameSample sample_frame(const PointCloud& cloud, const FrameSampleSettings& settings = {});
 
 }  // namespace plumb
+
+#include "plumb/segmentation/impl/frame_sample_impl.hpp"

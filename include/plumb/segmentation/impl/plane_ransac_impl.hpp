@@ -59,6 +59,120 @@ inline std::size_t count_plane_inliers(const PlaneCandidates& c, float a, float 
   return count;
 }
 
+/// The candidates again, grouped by the direction of their normal about an axis, so that a
+/// hypothesis only visits the groups whose normals can agree with its own (exact pruning: the
+/// same count as count_plane_inliers()).
+///
+/// With unit vectors e1, e2, axis, a normal n = (n_a along the axis, n_p across it) and a
+/// hypothesis h: |h.n| <= |h_a| max|n_a| + |h_p| max|n_p| max|cos(phi_h - phi_n)|, where phi is the
+/// direction of the part across the axis, as a line (mod pi). Groups are bins of phi (through a
+/// monotone pseudo-angle, no trigonometry); the max of |cos| over a bin that does not contain
+/// phi_h is reached at one of its edges.
+struct NormalBins {
+  static constexpr int kBins = 32;
+  std::vector<float> x, y, z, nx, ny, nz;  // candidates ordered by bin
+  std::size_t start[kBins + 1] = {};
+  double max_along[kBins] = {};   // max |n . axis| in the bin
+  double max_across[kBins] = {};  // max |n - (n . axis) axis| in the bin
+  double edge_u[kBins + 1] = {}, edge_v[kBins + 1] = {};  // unit edge directions in (e1, e2)
+  Vector3d axis, e1, e2;
+
+  /// Pseudo-angle in [0, 2) of the line through (u, v): monotone in its angle in [0, pi).
+  static double line_pseudo_angle(double u, double v) {
+    if (v < 0.0 || (v == 0.0 && u < 0.0)) {
+      u = -u;
+      v = -v;
+    }
+    const double s = std::abs(u) + v;
+    if (!(s > 0.0)) return 0.0;
+    return u >= 0.0 ? v / s : 1.0 + (-u) / s;
+  }
+  static int bin_of(double t) {
+    return std::min(kBins - 1, std::max(0, static_cast<int>(t * (kBins / 2.0))));
+  }
+
+  void build(const PlaneCandidates& c, const Vector3d& unit_axis) {
+    axis = unit_axis;
+    e1 = axis.unitOrthogonal();
+    e2 = axis.cross(e1);
+    const std::size_t n = c.x.size();
+    std::vector<int> bin(n);
+    std::size_t count[kBins] = {};
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vector3d nn(c.nx[i], c.ny[i], c.nz[i]);
+      const double u = nn.dot(e1), v = nn.dot(e2), a = nn.dot(axis);
+      const int b = bin_of(line_pseudo_angle(u, v));
+      bin[i] = b;
+      ++count[b];
+      max_along[b] = std::max(max_along[b], std::abs(a));
+      max_across[b] = std::max(max_across[b], std::sqrt(u * u + v * v));
+    }
+    start[0] = 0;
+    for (int b = 0; b < kBins; ++b) start[b + 1] = start[b] + count[b];
+    std::size_t next[kBins];
+    for (int b = 0; b < kBins; ++b) next[b] = start[b];
+    x.resize(n);
+    y.resize(n);
+    z.resize(n);
+    nx.resize(n);
+    ny.resize(n);
+    nz.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t j = next[bin[i]]++;
+      x[j] = c.x[i];
+      y[j] = c.y[i];
+      z[j] = c.z[i];
+      nx[j] = c.nx[i];
+      ny[j] = c.ny[i];
+      nz[j] = c.nz[i];
+    }
+    for (int b = 0; b <= kBins; ++b) {  // the direction whose pseudo-angle is the edge's
+      const double t = 2.0 * b / kBins;
+      const double u = 1.0 - t, v = t <= 1.0 ? t : 2.0 - t;
+      const double len = std::sqrt(u * u + v * v);
+      edge_u[b] = u / len;
+      edge_v[b] = v / len;
+    }
+  }
+
+  /// count_plane_inliers() over the bins that can hold agreeing normals.
+  std::size_t count(const Vector3d& h, float a, float b, float cc, float d, float tau, float cos_max,
+                    std::size_t beat) const {
+    const double ha = std::abs(h.dot(axis)), hu = h.dot(e1), hv = h.dot(e2);
+    const double hp = std::sqrt(hu * hu + hv * hv);
+    const int hb = bin_of(line_pseudo_angle(hu, hv));
+    const double du = hp > 0.0 ? hu / hp : 0.0, dv = hp > 0.0 ? hv / hp : 0.0;
+    // Margin for the float arithmetic of the inlier test (|error| ~1e-6).
+    const double need = static_cast<double>(cos_max) - 1e-4;
+    int visit[kBins];
+    int num_visit = 0;
+    std::size_t remaining = 0;
+    for (int k = 0; k < kBins; ++k) {
+      if (start[k + 1] == start[k]) continue;
+      const double cos_max_bin =
+          k == hb ? 1.0
+                  : std::max(std::abs(du * edge_u[k] + dv * edge_v[k]), std::abs(du * edge_u[k + 1] + dv * edge_v[k + 1]));
+      if (ha * max_along[k] + hp * max_across[k] * std::min(1.0, cos_max_bin) < need) continue;
+      visit[num_visit++] = k;
+      remaining += start[k + 1] - start[k];
+    }
+    std::size_t total = 0;
+    for (int v = 0; v < num_visit; ++v) {
+      const std::size_t begin = start[visit[v]], end = start[visit[v] + 1];
+      std::uint32_t in_bin = 0;
+      for (std::size_t i = begin; i < end; ++i) {
+        const float dist = std::abs(a * x[i] + b * y[i] + cc * z[i] - d);
+        const float agree = std::abs(a * nx[i] + b * ny[i] + cc * nz[i]);
+        in_bin += static_cast<std::uint32_t>((dist < tau) & (agree >= cos_max));
+      }
+      total += in_bin;
+      remaining -= end - begin;
+      if (total + remaining <= beat) return total;
+    }
+    return total;
+  }
+};
+
 /// Whether a unit normal satisfies the axis constraint (axis unit, cos/sin of ε precomputed).
 inline bool plane_constraint_ok(const Vector3d& n, AxisConstraint constraint, const Vector3d& axis,
                                 double cos_eps, double sin_eps) {
@@ -178,6 +292,11 @@ inline PlaneRansacResult fit_plane_ransac(const std::vector<Vector3f>& points,
   if (n < 3 || n < s.min_inliers) return out;  // kInsufficientData
   // A zero normal gives agreement 0, which passes only when cos_normal <= 0, i.e. never here.
 
+  // Normal agreement required (cos > 0): count through the bins of normal directions.
+  detail::NormalBins bins;
+  const bool use_bins = c.has_normals && cos_normal > 0.0f && n >= 128;
+  if (use_bins) bins.build(c, axis);
+
   Rng rng(s.seed);
   std::size_t best_count = 0;
   Plane best;
@@ -216,9 +335,12 @@ inline PlaneRansacResult fit_plane_ransac(const std::vector<Vector3f>& points,
     if (!detail::plane_constraint_ok(nrm, s.constraint, axis, cos_eps, sin_eps)) continue;
     const double d = nrm.dot(p0);
     const std::size_t count =
-        detail::count_plane_inliers(c, static_cast<float>(nrm.x()), static_cast<float>(nrm.y()),
-                                    static_cast<float>(nrm.z()), static_cast<float>(d), tau, cos_normal,
-                                    have_best ? best_count : 0);
+        use_bins ? bins.count(nrm, static_cast<float>(nrm.x()), static_cast<float>(nrm.y()),
+                              static_cast<float>(nrm.z()), static_cast<float>(d), tau, cos_normal,
+                              have_best ? best_count : 0)
+                 : detail::count_plane_inliers(c, static_cast<float>(nrm.x()), static_cast<float>(nrm.y()),
+                                               static_cast<float>(nrm.z()), static_cast<float>(d), tau, cos_normal,
+                                               have_best ? best_count : 0);
     if (!have_best || count > best_count) {
       have_best = true;
       best_count = count;

@@ -175,15 +175,44 @@ inline VerticalPlanesResult extract_vertical_planes(const PointCloud& cloud, con
       for (std::size_t i : ground->inliers) is_ground[i] = 1;
     }
     const float tau = static_cast<float>(s.distance_threshold);
-    for (std::size_t i = 0; i < cloud.points.size(); ++i) {
-      if (is_ground[i] != 0) continue;
-      const Vector3f& p = cloud.points[i];
-      for (std::size_t k = 0; k < lab.size(); ++k) {
-        if (lab[k].contains(p, tau)) {  // NaN points fail the distance test
-          out.plane_of_point[i] = static_cast<std::int32_t>(k);
-          out.planes[k].num_points += 1;
-          out.num_points += 1;
-          break;
+    const std::vector<Vector3f>& pts = cloud.points;
+    const std::size_t n = pts.size();
+    // Planes in groups of 32: one branch-free pass per plane marks the points within tau of it (the
+    // same float test as contains(), so no point is missed), then only marked points are checked
+    // against the planes' extents, in plane order (the first plane that contains a point wins).
+    std::vector<float> px(n), py(n), pz(n);  // coordinates as arrays: the passes vectorize
+    for (std::size_t i = 0; i < n; ++i) {
+      px[i] = pts[i].x();
+      py[i] = pts[i].y();
+      pz[i] = pts[i].z();
+    }
+    std::vector<std::uint32_t> near(n);
+    for (std::size_t first = 0; first < lab.size(); first += 32) {
+      const std::size_t last = std::min(lab.size(), first + 32);
+      std::fill(near.begin(), near.end(), 0u);
+      for (std::size_t k = first; k < last; ++k) {
+        const float a = lab[k].a, b = lab[k].b, c = lab[k].c, d = lab[k].d;
+        const std::uint32_t bit = std::uint32_t{1} << (k - first);
+        std::uint32_t* mark = near.data();
+        const float* x = px.data();
+        const float* y = py.data();
+        const float* z = pz.data();
+        for (std::size_t i = 0; i < n; ++i) {
+          mark[i] |= std::abs(a * x[i] + b * y[i] + c * z[i] - d) < tau ? bit : 0u;  // NaN: no
+        }
+      }
+      for (std::size_t i = 0; i < n; ++i) {
+        std::uint32_t m = near[i];
+        if (m == 0 || is_ground[i] != 0 || out.plane_of_point[i] >= 0) continue;
+        while (m != 0) {
+          const std::size_t k = first + static_cast<std::size_t>(__builtin_ctz(m));
+          m &= m - 1;
+          if (lab[k].contains(pts[i], tau)) {
+            out.plane_of_point[i] = static_cast<std::int32_t>(k);
+            out.planes[k].num_points += 1;
+            out.num_points += 1;
+            break;
+          }
         }
       }
     }

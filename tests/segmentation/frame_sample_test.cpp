@@ -1,0 +1,218 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The fast paths of segment_frame() against their references: the frame sample against
+// voxel_grid() + estimate_normals() on a kd-tree, the normal-direction bins of the point + normal
+// RANSAC against the plain inlier count, and the stages' handling of empty and bad input.
+#include "plumb/segmentation/frame_sample.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "plumb/core/rng.hpp"
+#include "plumb/filters/voxel_grid.hpp"
+#include "plumb/io/cloud_io.hpp"
+#include "plumb/search/kdtree.hpp"
+#include "plumb/segmentation/ground.hpp"
+#include "plumb/segmentation/plane_ransac.hpp"
+#include "plumb/segmentation/vertical_planes.hpp"
+#include "test_data.hpp"
+
+namespace plumb {
+namespace {
+
+constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
+
+bool same_bits(const Vector3f& a, const Vector3f& b) { return std::memcmp(a.data(), b.data(), sizeof(Vector3f)) == 0; }
+
+/// sample_frame() must be voxel_grid() (nearest to centroid) plus kd-tree normals, bit for bit.
+void expect_sample_matches_reference(const PointCloud& cloud, const FrameSampleSettings& s) {
+  const FrameSample sample = sample_frame(cloud, s);
+  PointCloud xyz;
+  xyz.points = cloud.points;
+  VoxelGridSettings vs;
+  vs.leaf_size = s.voxel_size;
+  const VoxelGridResult ref = voxel_grid(xyz, vs);
+  ASSERT_EQ(sample.status, Status::kOk);
+  ASSERT_EQ(sample.source, ref.indices);
+  ASSERT_EQ(sample.points.size(), ref.cloud.points.size());
+  for (std::size_t j = 0; j < sample.points.size(); ++j) ASSERT_TRUE(same_bits(sample.points[j], ref.cloud.points[j])) << j;
+  const KdTree<3> tree(ref.cloud.points);
+  NormalSettings ns;
+  ns.k = s.normal_k;
+  ns.radius = s.normal_radius;
+  ns.viewpoint = s.viewpoint;
+  const NormalResult normals = estimate_normals(ref.cloud.points, tree, ref.cloud.points, ns);
+  ASSERT_EQ(sample.normals.size(), normals.normals.size());
+  std::size_t num_nan = 0;
+  for (std::size_t j = 0; j < sample.normals.size(); ++j) {
+    if (!(sample.points[j].z() <= s.normal_max_z)) {
+      EXPECT_TRUE(std::isnan(sample.normals[j].x())) << j;
+      continue;
+    }
+    // The same neighbours; only the order they are summed in may differ (rounding).
+    const Vector3f& a = sample.normals[j];
+    const Vector3f& b = normals.normals[j];
+    ASSERT_EQ(std::isnan(a.x()), std::isnan(b.x())) << j;
+    if (!std::isnan(a.x())) {
+      EXPECT_GT(a.dot(b), 0.99999f) << j;
+    }
+    num_nan += std::isnan(a.x()) ? 1 : 0;
+  }
+  EXPECT_LT(num_nan, sample.normals.size() / 2);
+}
+
+TEST(FrameSampleTest, SyntheticCloudWithFieldsAndNanMatchesVoxelGrid) {
+  Rng rng(21);
+  PointCloud cloud;
+  for (int i = 0; i < 20000; ++i) {
+    // a floor, a wall and clutter; duplicated points and points exactly on voxel borders
+    const int kind = i % 4;
+    Vector3f p;
+    if (kind == 0) p = Vector3f(rng.uniform(-5, 5), rng.uniform(-5, 5), -1.5f + rng.normal(0, 0.01));
+    if (kind == 1) p = Vector3f(3.0f + rng.normal(0, 0.01), rng.uniform(-5, 5), rng.uniform(-1.5, 1.5));
+    if (kind == 2) p = Vector3f(rng.uniform(-5, 5), rng.uniform(-5, 5), rng.uniform(-1.5, 2));
+    if (kind == 3) p = i % 8 == 3 ? cloud.points[i - 3] : Vector3f(0.3f * static_cast<float>(i % 17), 0.6f, -0.9f);
+    cloud.points.push_back(p);
+  }
+  cloud.points[5] = Vector3f(kNan, 0, 0);
+  cloud.points[77] = Vector3f::Constant(std::numeric_limits<float>::infinity());
+  cloud.intensities.assign(cloud.size(), 1.0f);
+  cloud.rings.assign(cloud.size(), 3);
+  FrameSampleSettings s;
+  expect_sample_matches_reference(cloud, s);
+  s.voxel_size = 0.17;
+  s.normal_max_z = 0.0f;
+  expect_sample_matches_reference(cloud, s);
+}
+
+TEST(FrameSampleTest, RealFramesMatchVoxelGrid) {
+  PLUMB_REQUIRE_DATA(hdl32, "cloud3d/hdl32_pair/251370668.pcd");
+  PLUMB_REQUIRE_DATA(room, "cloud3d/pcl_room_scans/room_scan1.pcd");
+  FrameSampleSettings s;
+  expect_sample_matches_reference(io::read_cloud(hdl32), s);  // x y z intensity, no-return zeros
+  s.voxel_size = 0.1;
+  expect_sample_matches_reference(io::read_cloud(room), s);
+}
+
+TEST(FrameSampleTest, EmptyNanAndBadSettings) {
+  PointCloud empty;
+  EXPECT_EQ(sample_frame(empty).status, Status::kInsufficientData);
+  PointCloud nan;
+  nan.points.assign(10, Vector3f::Constant(kNan));
+  const FrameSample n = sample_frame(nan);
+  EXPECT_EQ(n.status, Status::kInsufficientData);
+  EXPECT_TRUE(n.points.empty());
+  EXPECT_EQ(n.num_finite, 0u);
+  PointCloud one_voxel;  // three finite points in one voxel: a sample of one point
+  one_voxel.points = {{0, 0, 0}, {0.01f, 0, 0}, {0, 0.01f, 0}, {kNan, 0, 0}};
+  const FrameSample o = sample_frame(one_voxel);
+  EXPECT_EQ(o.status, Status::kInsufficientData);
+  EXPECT_EQ(o.num_finite, 3u);
+  EXPECT_TRUE(o.source.empty());
+
+  PointCloud ok;
+  ok.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  FrameSampleSettings s;
+  s.voxel_size = 0.0;
+  EXPECT_THROW(sample_frame(ok, s), Error);
+  s.voxel_size = std::nan("");
+  EXPECT_THROW(sample_frame(ok, s), Error);
+  s = {};
+  s.normal_k = 2;
+  EXPECT_THROW(sample_frame(ok, s), Error);
+  s = {};
+  s.normal_max_z = kNan;
+  EXPECT_THROW(sample_frame(ok, s), Error);
+  ok.times = {0.0f};
+  EXPECT_THROW(sample_frame(ok), Error);
+}
+
+// The bins skip only groups of candidates none of which can agree with the hypothesis: their count
+// equals the plain count for any hypothesis, any candidate normals (tilted, zero, not unit) and any
+// axis, including when the count gives up early against a best count to beat.
+TEST(FrameSampleTest, NormalBinsCountEqualsPlainCount) {
+  Rng rng(8);
+  for (int trial = 0; trial < 6; ++trial) {
+    const Vector3d axis = trial < 3 ? Vector3d::UnitZ()
+                                    : Vector3d(rng.normal(), rng.normal(), rng.normal()).normalized();
+    detail::PlaneCandidates c;
+    c.has_normals = true;
+    const int n = 3000;
+    for (int i = 0; i < n; ++i) {
+      // walls around the axis (normals across it, a few degrees off), plus arbitrary normals
+      const double a = rng.uniform(0, 2 * 3.14159265358979323846);
+      const Vector3d e1 = axis.unitOrthogonal(), e2 = axis.cross(e1);
+      Vector3d nn = std::cos(a) * e1 + std::sin(a) * e2 + rng.normal(0, 0.05) * axis;
+      if (i % 5 == 0) nn = Vector3d(rng.normal(), rng.normal(), rng.normal());
+      nn.normalize();
+      if (i % 97 == 0) nn.setZero();               // a NaN normal is stored as zero
+      if (i % 89 == 0) nn *= 1.0 + 1e-6;           // not exactly unit
+      const Vector3d p(rng.uniform(-5, 5), rng.uniform(-5, 5), rng.uniform(-5, 5));
+      c.x.push_back(static_cast<float>(p.x()));
+      c.y.push_back(static_cast<float>(p.y()));
+      c.z.push_back(static_cast<float>(p.z()));
+      c.nx.push_back(static_cast<float>(nn.x()));
+      c.ny.push_back(static_cast<float>(nn.y()));
+      c.nz.push_back(static_cast<float>(nn.z()));
+      c.index.push_back(static_cast<std::size_t>(i));
+    }
+    detail::NormalBins bins;
+    bins.build(c, axis);
+    for (int h = 0; h < 400; ++h) {
+      // hypotheses: candidate normals (as RANSAC draws them) and random directions
+      const int i = static_cast<int>(rng.uniform_index(n));
+      Vector3d nrm = h % 3 == 0 ? Vector3d(rng.normal(), rng.normal(), rng.normal())
+                                : Vector3d(c.nx[i], c.ny[i], c.nz[i]);
+      if (!(nrm.norm() > 0.0)) continue;
+      nrm.normalize();
+      const double d = nrm.dot(Vector3d(c.x[i], c.y[i], c.z[i]));
+      const float cos_max = static_cast<float>(std::cos(rng.uniform(0.05, 1.4)));
+      const float tau = static_cast<float>(rng.uniform(0.05, 3.0));
+      const float a = static_cast<float>(nrm.x()), b = static_cast<float>(nrm.y()), cc = static_cast<float>(nrm.z()),
+                  df = static_cast<float>(d);
+      const std::size_t plain = detail::count_plane_inliers(c, a, b, cc, df, tau, cos_max, 0);
+      ASSERT_EQ(bins.count(nrm, a, b, cc, df, tau, cos_max, 0), plain) << "trial " << trial << " hypothesis " << h;
+      // against a count to beat: either the same count, or both give up at or below it
+      const std::size_t beat = static_cast<std::size_t>(rng.uniform_index(2 * plain + 2));
+      const std::size_t early = bins.count(nrm, a, b, cc, df, tau, cos_max, beat);
+      if (plain > beat) {
+        EXPECT_EQ(early, plain);
+      } else {
+        EXPECT_LE(early, beat);
+      }
+    }
+  }
+}
+
+TEST(FrameSampleTest, StagesOnEmptyOrMismatchedSamples) {
+  PointCloud empty;
+  EXPECT_EQ(extract_ground(empty).status, Status::kInsufficientData);
+  PointCloud nan;
+  nan.points.assign(50, Vector3f::Constant(kNan));
+  EXPECT_EQ(extract_ground(nan).status, Status::kInsufficientData);
+  const FrameSample none = sample_frame(nan);
+  const VerticalPlanesResult v = extract_vertical_planes(nan, none, nullptr);
+  EXPECT_EQ(v.status, Status::kInsufficientData);
+  EXPECT_EQ(v.plane_of_point, std::vector<std::int32_t>(50, -1));
+
+  // A sample taken from another cloud is misuse: plumb::Error, not a crash.
+  Rng rng(2);
+  PointCloud big;
+  for (int i = 0; i < 2000; ++i) big.points.emplace_back(rng.uniform(-3, 3), rng.uniform(-3, 3), -1.0f);
+  const FrameSample sample = sample_frame(big);
+  ASSERT_EQ(sample.status, Status::kOk);
+  PointCloud small;
+  small.points.assign(10, Vector3f(0, 0, -1));
+  EXPECT_THROW(extract_ground(small, sample), Error);
+  EXPECT_THROW(extract_vertical_planes(small, sample, nullptr), Error);
+  FrameSample broken = sample;
+  broken.normals.pop_back();
+  EXPECT_THROW(extract_ground(big, broken), Error);
+  EXPECT_THROW(extract_vertical_planes(big, broken, nullptr), Error);
+}
+
+}  // namespace
+}  // namespace plumb
