@@ -256,6 +256,202 @@ void subtract_volume(Soup& s, const Volume& vol, double eps) {
   s = std::move(out);
 }
 
+/// Generalised winding number of a triangle soup around p (Jacobson et al. 2013: the solid angles
+/// of the triangles, Van Oosterom and Strackee 1983): about +-1 inside a closed surface, 0 outside.
+double winding_number(const Soup& s, const Vector3d& p) {
+  double sum = 0.0;
+  for (const Tri& t : s.t) {
+    const Vector3d a = s.v[t[0]] - p, b = s.v[t[1]] - p, c = s.v[t[2]] - p;
+    const double la = a.norm(), lb = b.norm(), lc = c.norm();
+    const double num = a.dot(b.cross(c));
+    const double den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
+    sum += 2.0 * std::atan2(num, den);
+  }
+  return sum / (4.0 * kPi);
+}
+
+/// Split convex polygons by a plane (n, d): pieces on either side, `eps` thick plane.
+void split_by_plane(std::vector<std::vector<Vector3d>>& polys, const Vector3d& n, double d, double eps) {
+  std::vector<std::vector<Vector3d>> out;
+  out.reserve(polys.size());
+  std::vector<double> dist;
+  for (auto& poly : polys) {
+    bool pos = false, neg = false;
+    dist.resize(poly.size());
+    for (std::size_t i = 0; i < poly.size(); ++i) {
+      dist[i] = n.dot(poly[i]) + d;
+      pos |= dist[i] > eps;
+      neg |= dist[i] < -eps;
+    }
+    if (!pos || !neg) {
+      out.push_back(std::move(poly));
+      continue;
+    }
+    std::vector<Vector3d> P, N;
+    for (std::size_t i = 0; i < poly.size(); ++i) {
+      const std::size_t j = (i + 1) % poly.size();
+      const double di = dist[i], dj = dist[j];
+      if (di >= -eps) P.push_back(poly[i]);
+      if (di <= eps) N.push_back(poly[i]);
+      if ((di > eps && dj < -eps) || (di < -eps && dj > eps)) {
+        const Vector3d x = poly[i] + (poly[j] - poly[i]) * (di / (di - dj));
+        P.push_back(x);
+        N.push_back(x);
+      }
+    }
+    if (P.size() >= 3) out.push_back(std::move(P));
+    if (N.size() >= 3) out.push_back(std::move(N));
+  }
+  polys.swap(out);
+}
+
+/// The faces a subtraction of `vol` from the solid bounded by `s` creates: the parts of the volume's
+/// boundary inside the solid (the reveals of a door or window opening, the back of a niche, the cut
+/// face of a clipping half-space), oriented towards the removed volume. Add them to the result of
+/// subtract_volume() to keep the element closed (boolean difference: boundary = (boundary of A
+/// outside B) + (boundary of B inside A, reversed)).
+Soup reveal_faces(const Soup& s, const Volume& vol, double eps) {
+  Soup out;
+  if (s.t.empty() || (!vol.has_hs && !vol.has_prism)) return out;
+  // Everything happens within the solid's bounds; unbounded parts of the volume are cut there.
+  Vector3d alo = Vector3d::Constant(kInf), ahi = -alo;
+  for (const Tri& t : s.t) {
+    for (std::uint32_t k : t) {
+      alo = alo.cwiseMin(s.v[k]);
+      ahi = ahi.cwiseMax(s.v[k]);
+    }
+  }
+  const double margin = 1.0 + (ahi - alo).norm();
+  alo -= Vector3d::Constant(margin);
+  ahi += Vector3d::Constant(margin);
+  const Affine from_local = vol.to_local.inverse();
+  const bool mirrored = from_local.linear().determinant() < 0.0;
+  // Candidate faces: each with its normal pointing into the volume.
+  std::vector<std::vector<Vector3d>> faces;
+  auto add_face = [&](std::vector<Vector3d> f, bool flip) {
+    if (flip) std::reverse(f.begin(), f.end());
+    faces.push_back(std::move(f));
+  };
+  if (vol.has_hs) {
+    // A square on the plane covering the solid: material (inside) is n.x + d < 0 in the outer frame.
+    const auto pl = vol.planes().front().first;  // the half-space comes first
+    const Vector3d n = pl.head<3>();
+    const Vector3d c0 = 0.5 * (alo + ahi);
+    const Vector3d c = c0 - (n.dot(c0) + pl[3]) * n;
+    int k = 0;
+    n.cwiseAbs().minCoeff(&k);
+    const Vector3d u = n.cross(Vector3d::Unit(k)).normalized(), w = n.cross(u);
+    const double r = (ahi - alo).norm();
+    // (u, w, n) is right-handed; this order is clockwise in (u, w), so the face looks along -n,
+    // into the volume.
+    add_face({c + r * (u + w), c + r * (u - w), c + r * (-u - w), c + r * (-u + w)}, false);
+  }
+  if (vol.has_prism) {
+    std::vector<Loop2> loops = vol.loops;
+    for (std::size_t k = 0; k < loops.size(); ++k) {  // outer counter-clockwise, holes clockwise
+      if ((k == 0) != (signed_area(loops[k]) > 0)) std::reverse(loops[k].begin(), loops[k].end());
+    }
+    // Local z range of the solid's bounds.
+    double zmin = kInf, zmax = -kInf;
+    for (int corner = 0; corner < 8; ++corner) {
+      const Vector3d p((corner & 1) ? ahi.x() : alo.x(), (corner & 2) ? ahi.y() : alo.y(), (corner & 4) ? ahi.z() : alo.z());
+      const double z = (vol.to_local * p).z();
+      zmin = std::min(zmin, z);
+      zmax = std::max(zmax, z);
+    }
+    const double z_lo = std::max(vol.z_lo, zmin), z_hi = std::min(vol.z_hi, zmax);
+    if (z_lo < z_hi) {
+      auto at = [&](const Vector2d& q, double z) {
+        return Vector3d(from_local * (Vector3d(q.x(), q.y(), 0.0) + vol.dir * (z / vol.dir.z())));
+      };
+      for (const auto& l : loops) {
+        for (std::size_t i = 0; i < l.size(); ++i) {
+          const Vector2d& a = l[i];
+          const Vector2d& b = l[(i + 1) % l.size()];
+          if ((b - a).squaredNorm() == 0.0) continue;
+          // Outward order a_lo b_lo b_hi a_hi, reversed.
+          add_face({at(a, z_lo), at(a, z_hi), at(b, z_hi), at(b, z_lo)}, mirrored);
+        }
+      }
+      std::vector<Vector2d> flat;
+      for (const auto& l : loops) flat.insert(flat.end(), l.begin(), l.end());
+      const auto caps = triangulate_polygon(loops);  // counter-clockwise: +z
+      for (const Tri& t : caps) {
+        if (std::isfinite(vol.z_lo) && z_lo == vol.z_lo) {  // bottom, faces +z
+          add_face({at(flat[t[0]], z_lo), at(flat[t[1]], z_lo), at(flat[t[2]], z_lo)}, mirrored);
+        }
+        if (std::isfinite(vol.z_hi) && z_hi == vol.z_hi) {  // top, faces -z
+          add_face({at(flat[t[0]], z_hi), at(flat[t[2]], z_hi), at(flat[t[1]], z_hi)}, mirrored);
+        }
+      }
+    }
+  }
+  Vector3d blo = alo, bhi = ahi;
+  Vector3d vlo, vhi;
+  if (vol.bounds(vlo, vhi)) {
+    blo = blo.cwiseMax(vlo);
+    bhi = bhi.cwiseMin(vhi);
+  }
+  // Split them along the planes of the solid's faces near the volume: every piece then lies
+  // entirely inside or entirely outside the solid.
+  const double tol = eps + std::max(vol.margin, 0.0);
+  std::vector<Eigen::Vector4d> planes;
+  for (const Tri& t : s.t) {
+    const Vector3d& a = s.v[t[0]];
+    const Vector3d& b = s.v[t[1]];
+    const Vector3d& c = s.v[t[2]];
+    const Vector3d lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
+    if ((lo.array() > bhi.array() + tol).any() || (hi.array() < blo.array() - tol).any()) continue;
+    Vector3d n = (b - a).cross(c - a);
+    const double nn = n.norm();
+    if (!(nn > 0.0)) continue;
+    n /= nn;
+    double d = -n.dot(a);
+    // One sign per plane, so both orientations of a face deduplicate.
+    int k = 0;
+    n.cwiseAbs().maxCoeff(&k);
+    if (n[k] < 0) {
+      n = -n;
+      d = -d;
+    }
+    bool seen = false;
+    for (const auto& p : planes) {
+      if ((p.head<3>() - n).squaredNorm() < 1e-18 && std::abs(p[3] - d) < eps) {
+        seen = true;
+        break;
+      }
+    }
+    if (!seen) planes.emplace_back(n.x(), n.y(), n.z(), d);
+  }
+  const auto vol_planes = vol.planes();
+  // A piece is a face of the difference when the material just outside the volume, next to it,
+  // belongs to the solid.
+  const double step = 1000.0 * eps;
+  for (auto& f : faces) {
+    Vector3d n = (f[1] - f[0]).cross(f[2] - f[0]);
+    const double nn = n.norm();
+    if (!(nn > 0.0)) continue;
+    n /= nn;  // into the volume
+    std::vector<std::vector<Vector3d>> pieces(1, std::move(f));
+    for (const auto& p : planes) split_by_plane(pieces, p.head<3>(), p[3], eps);
+    for (const auto& p : vol_planes) split_by_plane(pieces, p.first.head<3>(), p.first[3], eps);
+    for (const auto& piece : pieces) {
+      Vector3d centroid = Vector3d::Zero();
+      for (const auto& q : piece) centroid += q;
+      centroid /= static_cast<double>(piece.size());
+      // On the volume's boundary (a candidate face may run outside the volume: the half-space
+      // plane beyond a bounding polygon, a prism side beyond the half-space) ...
+      if (!vol.inside(centroid + step * n, eps) || vol.inside(centroid - step * n, eps)) continue;
+      // ... and against the solid's material.
+      if (std::abs(winding_number(s, centroid - step * n)) < 0.5) continue;
+      const auto base = static_cast<std::uint32_t>(out.v.size());
+      out.v.insert(out.v.end(), piece.begin(), piece.end());
+      for (std::uint32_t k = 1; k + 1 < piece.size(); ++k) out.t.push_back({base, base + k, base + k + 1});
+    }
+  }
+  return out;
+}
+
 class Builder {
  public:
   Builder(const IfcModel& model, const BimMeshSettings& settings)
@@ -934,7 +1130,9 @@ class Builder {
       item(second, first, depth + 1);
     } else if (op == "DIFFERENCE") {
       const Volume vol = volume(second, depth + 1);
+      const Soup cut = reveal_faces(first, vol, eps_);
       subtract_volume(first, vol, eps_);
+      first.append(cut, Affine::Identity());
     } else {
       unsupported(id);  // INTERSECTION: keep the first operand
     }
@@ -1220,7 +1418,9 @@ BimMesh Builder::run() {
             opening_volumes(op, vols);
             for (auto& v : vols) {
               v.margin = 100.0 * eps_;  // faces flush with the opening are cut too
+              const Soup reveals = reveal_faces(s, v, eps_);
               subtract_volume(s, v, eps_);
+              s.append(reveals, Affine::Identity());
             }
           } catch (const Error& err) {
             mesh_.warnings.push_back(std::string(err.what()) + " (opening of #" + std::to_string(e.id) + " ignored)");

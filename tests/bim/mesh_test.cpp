@@ -1,9 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "plumb/bim/mesh.hpp"
 #include "plumb/bim/sample.hpp"
@@ -52,6 +56,96 @@ std::string box_model(double x_mm, const std::string& extra = "", const std::str
          "#13=IFCPRODUCTDEFINITIONSHAPE($,$,(#20));\n#20=IFCSHAPEREPRESENTATION($,'Body','SweptSolid',(" + rep_items +
          "));\n#21=IFCEXTRUDEDAREASOLID(#22,$,#6,2000.);\n#22=IFCRECTANGLEPROFILEDEF(.AREA.,$,$,1000.,1000.);\n" +
          extra + "ENDSEC;\nEND-ISO-10303-21;\n";
+}
+
+/// Enclosed volume measured from another origin: equal to volume_of() only for a closed surface.
+double volume_from(const BimMesh& m, const Vector3d& origin, int element = -1) {
+  double v = 0.0;
+  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+    if (element >= 0 && m.triangle_element[t] != element) continue;
+    const auto& tri = m.triangles[t];
+    const Vector3d a = m.vertices[tri[0]] - origin, b = m.vertices[tri[1]] - origin, c = m.vertices[tri[2]] - origin;
+    v += a.dot(b.cross(c)) / 6.0;
+  }
+  return v;
+}
+
+/// Independent ray oracle: nearest Moeller-Trumbore hit over all triangles, infinity for none.
+double ray_range(const BimMesh& m, const Vector3d& o, const Vector3d& d) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& t : m.triangles) {
+    const Vector3d e1 = m.vertices[t[1]] - m.vertices[t[0]], e2 = m.vertices[t[2]] - m.vertices[t[0]];
+    const Vector3d p = d.cross(e2);
+    const double det = e1.dot(p);
+    if (std::abs(det) < 1e-300) continue;
+    const Vector3d s = o - m.vertices[t[0]];
+    const double u = s.dot(p) / det;
+    const Vector3d q = s.cross(e1);
+    const double w = d.dot(q) / det;
+    if (u < -1e-12 || w < -1e-12 || u + w > 1.0 + 1e-12) continue;
+    const double r = e2.dot(q) / det;
+    if (r > 1e-12 && r < best) best = r;
+  }
+  return best;
+}
+
+/// Points of an element's box (grown by 10 %) where the winding number of its surface is not
+/// 0 or 1: none for a closed, consistently oriented surface; a gap (a missing reveal) shows up.
+int num_fractional_windings(const BimMesh& m, int element, int samples) {
+  const auto& el = m.elements[static_cast<std::size_t>(element)];
+  const Vector3d lo = el.bbox_min - 0.1 * (el.bbox_max - el.bbox_min), hi = el.bbox_max + 0.1 * (el.bbox_max - el.bbox_min);
+  int bad = 0;
+  std::uint64_t state = 12345;
+  auto uniform = [&state]() {  // splitmix64 -> [0, 1)
+    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return static_cast<double>((z ^ (z >> 31)) >> 11) * 0x1.0p-53;
+  };
+  for (int i = 0; i < samples; ++i) {
+    const Vector3d p(lo.x() + uniform() * (hi.x() - lo.x()), lo.y() + uniform() * (hi.y() - lo.y()),
+                     lo.z() + uniform() * (hi.z() - lo.z()));
+    double w = 0.0;  // solid angles (Van Oosterom and Strackee 1983) / 4 pi
+    for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+      if (m.triangle_element[t] != element) continue;
+      const auto& tri = m.triangles[t];
+      const Vector3d a = m.vertices[tri[0]] - p, b = m.vertices[tri[1]] - p, c = m.vertices[tri[2]] - p;
+      const double la = a.norm(), lb = b.norm(), lc = c.norm();
+      w += 2.0 * std::atan2(a.dot(b.cross(c)), la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la);
+    }
+    w /= 4.0 * M_PI;
+    if (std::abs(w) > 1e-6 && std::abs(w - 1.0) > 1e-6) ++bad;
+  }
+  return bad;
+}
+
+/// A 4 x 0.3 x 3 m IFC4 wall (mm; x -2000..2000, y -150..150, z 0..3000) with box openings given
+/// as "cx,cy,cz,size_x,size_y,height" in mm (the box spans cz..cz+height, centred in x and y).
+std::string wall_model(const std::vector<std::array<double, 6>>& openings) {
+  std::string text =
+      "ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION(('x'),'2;1');\nFILE_NAME('w','',(''),(''),'','','');\n"
+      "FILE_SCHEMA(('IFC4'));\nENDSEC;\nDATA;\n"
+      "#1=IFCUNITASSIGNMENT((#2));\n#2=IFCSIUNIT(*,.LENGTHUNIT.,.MILLI.,.METRE.);\n"
+      "#5=IFCCARTESIANPOINT((0.,0.,0.));\n#6=IFCDIRECTION((0.,0.,1.));\n"
+      "#10=IFCWALL('gw',$,'W',$,$,#11,#13,$,$);\n#11=IFCLOCALPLACEMENT($,#12);\n#12=IFCAXIS2PLACEMENT3D(#5,$,$);\n"
+      "#13=IFCPRODUCTDEFINITIONSHAPE($,$,(#20));\n#20=IFCSHAPEREPRESENTATION($,'Body','SweptSolid',(#21));\n"
+      "#21=IFCEXTRUDEDAREASOLID(#22,$,#6,3000.);\n#22=IFCRECTANGLEPROFILEDEF(.AREA.,$,$,4000.,300.);\n";
+  int id = 100;
+  for (const auto& o : openings) {
+    auto n = [](double x) { return std::to_string(x); };
+    const std::string op = "#" + std::to_string(id), pl = "#" + std::to_string(id + 1), ax = "#" + std::to_string(id + 2),
+                      pt = "#" + std::to_string(id + 3), ps = "#" + std::to_string(id + 4), rep = "#" + std::to_string(id + 5),
+                      ex = "#" + std::to_string(id + 6), pr = "#" + std::to_string(id + 7), rel = "#" + std::to_string(id + 8);
+    text += op + "=IFCOPENINGELEMENT('go" + std::to_string(id) + "',$,'O',$,$," + pl + "," + ps + ",$,$);\n" + pl +
+            "=IFCLOCALPLACEMENT($," + ax + ");\n" + ax + "=IFCAXIS2PLACEMENT3D(" + pt + ",$,$);\n" + pt +
+            "=IFCCARTESIANPOINT((" + n(o[0]) + "," + n(o[1]) + "," + n(o[2]) + "));\n" + ps +
+            "=IFCPRODUCTDEFINITIONSHAPE($,$,(" + rep + "));\n" + rep + "=IFCSHAPEREPRESENTATION($,'Body','SweptSolid',(" +
+            ex + "));\n" + ex + "=IFCEXTRUDEDAREASOLID(" + pr + ",$,#6," + n(o[5]) + ");\n" + pr +
+            "=IFCRECTANGLEPROFILEDEF(.AREA.,$,$," + n(o[3]) + "," + n(o[4]) + ");\n" + rel + "=IFCRELVOIDSELEMENT('gr" +
+            std::to_string(id) + "',$,$,$,#10," + op + ");\n";
+    id += 10;
+  }
+  return text + "ENDSEC;\nEND-ISO-10303-21;\n";
 }
 
 void expect_box(const BimMesh& m, double tol) {
@@ -119,9 +213,15 @@ TEST(BimMeshTest, HalfSpaceClippingReducesTheSlabs) {
     ASSERT_GE(e, 0);
     const auto& el = m.elements[static_cast<std::size_t>(e)];
     EXPECT_GT(el.num_triangles, 12u) << id;
-    EXPECT_LT(area_of(m, e), 280.0 - 1.0) << id;
-    EXPECT_GT(area_of(m, e), 100.0) << id;
+    EXPECT_LT(volume_of(m, e), 200.0 - 1.0) << id;
+    EXPECT_GT(volume_of(m, e), 50.0) << id;
     EXPECT_NEAR(el.bbox_max.x() - el.bbox_min.x(), 10.0, 1e-9) << id;
+  }
+  // Every clipped slab stays closed: the cut face is added where the half-space removed material.
+  for (std::uint32_t id : {98u, 99u, 100u, 101u, 102u, 103u}) {
+    const int e = m.find_element(id);
+    EXPECT_EQ(num_fractional_windings(m, e, 200), 0) << id;
+    EXPECT_NEAR(volume_from(m, Vector3d(30, -40, 50), e), volume_of(m, e), 1e-6) << id;
   }
 }
 
@@ -144,9 +244,69 @@ TEST(BimMeshTest, OpeningLeavesNoSampledPoints) {
   }
   EXPECT_EQ(inside, 0u);
   EXPECT_GT(beside, 1000u);
-  // Wall area: 2 faces of 3 x 2 m minus the 1 x 1 m hole, top/bottom/ends 0.3 m wide, reveals are not generated.
-  const double expected = 2 * (6.0 - 1.0) + 2 * 3.0 * 0.3 + 2 * 2.0 * 0.3 - 2 * 1.0 * 0.3 * 0.0;
+  // Wall area: 2 faces of 3 x 2 m minus the 1 x 1 m hole, top/bottom/ends 0.3 m wide, and the four
+  // 1 m x 0.3 m reveals of the hole.
+  const double expected = 2 * (6.0 - 1.0) + 2 * 3.0 * 0.3 + 2 * 2.0 * 0.3 + 4 * 1.0 * 0.3;
   EXPECT_NEAR(area_of(m, wall), expected, 1e-6);
+  // Closed: 3 x 2 x 0.3 m minus the 1 x 1 x 0.3 m hole, whatever the origin of the measurement.
+  EXPECT_NEAR(volume_of(m, wall), 1.8 - 0.3, 1e-9);
+  EXPECT_NEAR(volume_from(m, Vector3d(10.0, -20.0, 30.0), wall), 1.8 - 0.3, 1e-9);
+}
+
+TEST(BimMeshTest, OpeningsLeaveClosedWallsWithReveals) {
+  // A door (through, from the floor), a window (through) and a niche 0.1 m deep from the +y face.
+  const BimMesh m = build_mesh(parse_ifc(wall_model({{-1000, 0, 0, 1000, 600, 2000},
+                                                     {1000, 0, 1000, 800, 600, 1000},
+                                                     {1000, 150, 200, 600, 200, 600}})));
+  ASSERT_EQ(m.elements.size(), 1u);
+  EXPECT_TRUE(m.warnings.empty()) << m.warnings.front();
+  // 4 x 0.3 x 3 minus door 1 x 0.3 x 2, window 0.8 x 0.3 x 1, niche 0.6 x 0.1 x 0.6 (m^3).
+  const double volume = 3.6 - 0.6 - 0.24 - 0.036;
+  EXPECT_NEAR(volume_of(m), volume, 1e-9);
+  EXPECT_EQ(num_fractional_windings(m, 0, 300), 0);
+  for (const Vector3d& o : {Vector3d(10, 0, 0), Vector3d(-3, 7, -5), Vector3d(0, 0, 100)}) {
+    EXPECT_NEAR(volume_from(m, o), volume, 1e-9) << o.transpose();
+  }
+  // Faces: front 12 - 2 - 0.8, back 12 - 2 - 0.8 - 0.36, top 1.2, bottom 1.2 - 0.3, ends 1.8,
+  // door reveals 2 x 0.6 + lintel 0.3, window reveals 2 x 0.3 + 2 x 0.24, niche 0.36 + 4 x 0.06.
+  EXPECT_NEAR(area_of(m), 9.2 + 8.84 + 1.2 + 0.9 + 1.8 + 1.5 + 1.08 + 0.6, 1e-9);
+  // Rays inside the openings meet the reveals, not the wall's far end.
+  EXPECT_NEAR(ray_range(m, Vector3d(-1.0, 0.0, 1.0), Vector3d::UnitX()), 0.5, 1e-9);
+  EXPECT_NEAR(ray_range(m, Vector3d(-1.0, 0.1, 1.0), -Vector3d::UnitX()), 0.5, 1e-9);
+  EXPECT_NEAR(ray_range(m, Vector3d(-1.0, 0.0, 1.0), Vector3d::UnitZ()), 1.0, 1e-9);
+  EXPECT_NEAR(ray_range(m, Vector3d(1.0, 0.0, 1.5), -Vector3d::UnitZ()), 0.5, 1e-9);
+  EXPECT_NEAR(ray_range(m, Vector3d(1.0, 0.0, 1.5), Vector3d::UnitX()), 0.4, 1e-9);
+  EXPECT_NEAR(ray_range(m, Vector3d(1.0, 1.0, 0.5), -Vector3d::UnitY()), 0.95, 1e-9);
+  // Through the door and the window along y: nothing.
+  EXPECT_EQ(ray_range(m, Vector3d(-1.0, 1.0, 1.0), -Vector3d::UnitY()), std::numeric_limits<double>::infinity());
+  EXPECT_EQ(ray_range(m, Vector3d(1.0, 1.0, 1.5), -Vector3d::UnitY()), std::numeric_limits<double>::infinity());
+  // Without subtraction: the plain box.
+  BimMeshSettings keep;
+  keep.subtract_openings = false;
+  const BimMesh plain = build_mesh(parse_ifc(wall_model({{-1000, 0, 0, 1000, 600, 2000}})), keep);
+  EXPECT_NEAR(volume_of(plain), 3.6, 1e-9);
+  EXPECT_EQ(plain.num_triangles(), 12u);
+}
+
+TEST(BimMeshTest, FzkHausWallsAndSlabsAreClosed) {
+  // Before reveals and clipping caps were added, 8 walls had fractional winding numbers (holes at
+  // doors, windows and the gables).
+  PLUMB_REQUIRE_DATA(path, "ifc/buildings/AC20-FZK-Haus.ifc");
+  const BimMesh m = mesh_of("ifc/buildings/AC20-FZK-Haus.ifc");
+  int checked = 0;
+  for (std::size_t e = 0; e < m.elements.size(); ++e) {
+    const BimElement& el = m.elements[e];
+    if (el.num_triangles == 0 || (el.type.rfind("IfcWall", 0) != 0 && el.type != "IfcSlab")) continue;
+    const int ei = static_cast<int>(e);
+    const double v = volume_of(m, ei);
+    EXPECT_GT(v, 0.0) << el.type << " #" << el.express_id;
+    EXPECT_EQ(num_fractional_windings(m, ei, 100), 0) << el.type << " #" << el.express_id;
+    // A hole in the surface makes the enclosed "volume" depend on where it is measured from.
+    const Vector3d shift = el.bbox_max - el.bbox_min + Vector3d(5.0, 5.0, 5.0);
+    EXPECT_NEAR(volume_from(m, el.bbox_min - shift, ei), v, 1e-6 * (1.0 + v)) << el.type << " #" << el.express_id;
+    ++checked;
+  }
+  EXPECT_GT(checked, 10);
 }
 
 TEST(BimMeshTest, AcadWallsAllMeshed) {
