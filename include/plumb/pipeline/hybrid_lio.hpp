@@ -1,0 +1,201 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+/// @file
+/// @brief LiDAR/IMU tightly coupled hybrid odometry (SEEDS B, eq. 19-22): per frame, IMU deskew,
+///        cosine features, and one Gauss-Newton / Levenberg-Marquardt problem over the IMU states
+///        (R, p, v, b_g, b_a) of the previous and the current frame with the IMU factor (E_B), a
+///        prior on the previous state (the marginal of the last solve), and either LOAM residuals
+///        against a local feature map (E_L1, when the frame has enough plane points off the ground)
+///        or point-to-point ICP residuals against a local point map (E_L2).
+///
+/// Frames: `T_world_base` is what the caller gets; the estimator's state is the IMU frame
+/// (`T_world_imu = T_world_base * T_base_imu`). The world is z-up with gravity (0, 0, -gravity):
+/// the initial pose given to the constructor must carry the true roll and pitch.
+
+#include <cstddef>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "plumb/core/point_cloud.hpp"
+#include "plumb/core/status.hpp"
+#include "plumb/imu/imu.hpp"
+#include "plumb/imu/preintegration.hpp"
+#include "plumb/loam/features.hpp"
+#include "plumb/loam/local_map.hpp"
+#include "plumb/loam/odometry.hpp"
+#include "plumb/loam/range_image.hpp"
+
+namespace plumb {
+
+/// @brief Which estimator HybridLio runs.
+enum class LioMode {
+  kLoam,     ///< LiDAR only: LOAM residuals, constant-velocity prediction, no deskew (LeGO-LOAM without IMU)
+  kLoamImu,  ///< IMU factor + LOAM residuals on every frame (E_B + E_L1), IMU deskew and prediction
+  kHybrid,   ///< as kLoamImu, but frames with too few plane points use ICP residuals (E_B + E_L2)
+};
+
+/// @brief "loam", "loam-imu", "hybrid". @throws plumb::Error for another name.
+LioMode lio_mode_from_string(const std::string& name);
+/// @brief "loam", "loam-imu", "hybrid".
+const char* to_string(LioMode mode);
+
+/// @brief How one frame was estimated.
+enum class LioFrameMode {
+  kInit,        ///< first frame: the initial pose, the map is started
+  kLoam,        ///< LOAM edge / plane residuals against the feature map
+  kIcp,         ///< point-to-point ICP residuals against the point map
+  kPrediction,  ///< no usable LiDAR residuals: IMU (or constant-velocity) prediction only
+  kSkipped,     ///< frame rejected (stamp not after the previous frame's); the state is unchanged
+};
+
+/// @brief "init", "loam", "icp", "prediction", "skipped".
+const char* to_string(LioFrameMode mode);
+
+/// @brief Settings of HybridLio. Defaults suit a 16-line LiDAR at 10 Hz and a MEMS IMU.
+struct HybridLioSettings {
+  LioMode mode = LioMode::kHybrid;  ///< estimator
+  Eigen::Isometry3d T_base_lidar = Eigen::Isometry3d::Identity();  ///< LiDAR points into the base frame
+  Eigen::Isometry3d T_base_imu = Eigen::Isometry3d::Identity();    ///< IMU frame into the base frame
+
+  // --- features and the hybrid switch (SEEDS B3.2)
+  RangeImageSettings image;       ///< range image of each (deskewed) frame
+  LoamFeatureSettings features;   ///< cosine features
+  /// Hybrid switch: a frame with at least this many selected plane points off the ground uses
+  /// LOAM residuals, fewer use ICP (SEEDS B3.2: 48). Ground points (the road) constrain only
+  /// height, roll and pitch, so they do not count as structure.
+  std::size_t min_plane_points = 48;
+  /// Two vertically adjacent returns below the horizon whose joining segment is flatter than this
+  /// are ground (LeGO-LOAM's ground test) [deg].
+  double ground_max_slope_deg = 10.0;
+
+  // --- solver (SEEDS B eq. 21-22)
+  int max_iterations = 8;                    ///< association + LM step rounds per frame, >= 1
+  double max_correspondence_distance = 1.0;  ///< farther map neighbours are not used [m]
+  int map_neighbors = 5;                     ///< map points fitted per LOAM query, in [3, 64]
+  double map_plane_tolerance = 0.2;          ///< a fitted plane's points must lie within this [m]
+  double map_edge_ratio = 3.0;               ///< a fitted line needs eigenvalue ratio >= this
+  double map_plane_ratio = 10.0;             ///< a fitted plane needs second / smallest eigenvalue >= this
+  double plane_sigma = 0.05;                 ///< std of a point-to-plane residual [m]
+  double edge_sigma = 0.1;                   ///< std of a point-to-line residual [m]
+  double point_sigma = 0.15;                 ///< std of a point-to-point (ICP) residual [m]
+  double huber_scale = 3.0;                  ///< Huber kernel on whitened LiDAR residuals [sigmas]
+  /// Fewer LiDAR residuals than this: the LiDAR is not used for the frame (hybrid first tries ICP).
+  std::size_t min_correspondences = 30;
+  double min_step_translation = 1e-4;        ///< converged below this step [m] ...
+  double min_step_rotation = 1e-5;           ///< ... and this rotation step [rad]
+
+  // --- local maps (bounded voxel hash maps, world frame)
+  VoxelHashMapSettings edge_map{0.3, 1, 60.0, 100000};    ///< LOAM edge points
+  VoxelHashMapSettings plane_map{0.4, 1, 60.0, 100000};   ///< LOAM plane points
+  VoxelHashMapSettings point_map{0.4, 4, 60.0, 150000};   ///< ICP points
+  double icp_voxel_size = 0.6;  ///< a frame's ICP queries: one point per voxel of this size [m]
+  /// The maps' kd-trees are rebuilt (with every point added since) once the sensor has moved this
+  /// far from where they were last built [m], or after map_rebuild_frames frames.
+  double map_rebuild_distance = 1.0;
+  int map_rebuild_frames = 10;  ///< see map_rebuild_distance, >= 1
+
+  // --- IMU
+  ImuNoise imu_noise;           ///< noise model of the IMU factor (MEMS defaults)
+  double gravity = 9.81;        ///< |g| [m/s^2] (the simulator's value; standard gravity is 9.80665)
+  double max_imu_gap = 0.05;    ///< longer without an IMU sample: the IMU is not used for the frame [s]
+  double initial_velocity_sigma = 0.2;     ///< prior std of the initial velocity (0 expected) [m/s]
+  double initial_gyro_bias_sigma = 0.005;  ///< prior std of the initial gyro bias [rad/s]
+  double initial_accel_bias_sigma = 0.1;   ///< prior std of the initial accelerometer bias [m/s^2]
+  /// Undo motion distortion in the IMU modes: with the IMU, or with constant velocity over an IMU
+  /// gap. kLoam never deskews (LeGO-LOAM deskews only with an IMU; a constant-velocity deskew feeds
+  /// the frame's own noise back into the next frame).
+  bool deskew = true;
+};
+
+/// @brief What HybridLio::process() did with one frame.
+struct LioFrameResult {
+  double stamp = 0.0;                                               ///< frame stamp [s]
+  Eigen::Isometry3d T_world_base = Eigen::Isometry3d::Identity();   ///< estimate at the stamp
+  Vector3d v_world = Vector3d::Zero();                              ///< velocity of the IMU [m/s]
+  ImuBias bias;                                                     ///< bias estimate
+  LioFrameMode mode = LioFrameMode::kSkipped;                       ///< how the frame was estimated
+  /// kOk; kNotConverged (LiDAR used, iteration limit); kInsufficientData (no usable LiDAR
+  /// residuals: prediction only); kInvalidInput (frame skipped: stamp not increasing / not finite).
+  Status status = Status::kOk;
+  bool imu_used = false;       ///< the IMU factor was part of the problem
+  bool imu_gap = false;        ///< an IMU mode, but the IMU did not cover the interval (gap): fallback
+  bool deskewed = false;       ///< points were moved to the stamp (IMU or constant velocity)
+  bool deskewed_with_imu = false;  ///< ... with the IMU
+  std::size_t num_points = 0;            ///< points in the frame
+  std::size_t num_plane_points = 0;      ///< plane features selected (all)
+  std::size_t num_structure_planes = 0;  ///< plane features off the ground (the switch's count)
+  std::size_t num_edge_points = 0;       ///< edge features selected
+  std::size_t num_plane_interval = 0;    ///< points in the plane cos interval (SEEDS B1.2)
+  std::size_t num_edge_interval = 0;     ///< points in the edge cos interval
+  std::size_t num_correspondences = 0;   ///< LiDAR residuals at the last iteration
+  int iterations = 0;                    ///< solver rounds
+  double rmse = 0.0;                     ///< RMS LiDAR residual at the last iteration [m]
+  double seconds = 0.0;                  ///< wall time of process() [s]
+};
+
+/// @brief The tightly coupled LiDAR/IMU hybrid odometry (see the file comment).
+///
+/// Usage: construct with the initial base pose, add_imu() every IMU sample as it arrives (a frame
+/// needs the samples up to the end of its sweep for deskewing), process() every frame in order.
+/// @note Deterministic; single-threaded; not thread-safe. Bad data never throws: IMU samples out
+///       of order or not finite are dropped (add_imu() says so), frames whose stamp does not
+///       increase are skipped, gaps in the IMU fall back to constant-velocity prediction, frames
+///       without features fall back to the prediction.
+class HybridLio {
+ public:
+  /// @throws plumb::Error on bad settings (non-finite pose, non-positive sigmas...).
+  explicit HybridLio(const Eigen::Isometry3d& T_world_base0 = Eigen::Isometry3d::Identity(),
+                     const HybridLioSettings& settings = {});
+
+  /// @brief Buffer one IMU sample (IMU frame).
+  /// @return kOk; kInvalidInput when the sample is not finite or its stamp does not increase (dropped).
+  Status add_imu(const ImuSample& sample);
+
+  /// @brief Estimate the pose of one LiDAR frame (points in the LiDAR frame, per-point `times`
+  ///        since `stamp` when the sensor reports them; rings used when present).
+  /// @throws plumb::Error only for a cloud with inconsistent fields (misuse).
+  LioFrameResult process(const PointCloud& frame_lidar, double stamp);
+
+  /// @brief Current base pose estimate (the initial pose before the first frame).
+  Eigen::Isometry3d T_world_base() const;
+  /// @brief Current IMU state estimate.
+  const ImuState& state() const { return state_; }
+  const HybridLioSettings& settings() const { return settings_; }
+  std::size_t num_frames() const { return num_frames_; }          ///< frames processed (not skipped)
+  std::size_t num_imu_dropped() const { return num_imu_dropped_; }  ///< samples add_imu() rejected
+  const VoxelHashMap& edge_map() const { return edge_map_; }      ///< @brief Local LOAM edge map.
+  const VoxelHashMap& plane_map() const { return plane_map_; }    ///< @brief Local LOAM plane map.
+  const VoxelHashMap& point_map() const { return point_map_; }    ///< @brief Local ICP point map.
+
+ private:
+  void deskew(PointCloud& cloud, double stamp, const ImuState& at_stamp, bool use_imu, LioFrameResult& res) const;
+  bool imu_covers(double t0, double t1) const;
+  void update_maps(const LoamFeatures& f, const PointCloud& cloud, const Eigen::Isometry3d& T_world_lidar);
+  void reset_prior();
+
+  HybridLioSettings settings_;
+  Eigen::Isometry3d T_imu_lidar_ = Eigen::Isometry3d::Identity();
+  ImuState state_;
+  Eigen::Matrix<double, 15, 15> prior_information_ = Eigen::Matrix<double, 15, 15>::Zero();
+  Vector6d twist_ = Vector6d::Zero();  ///< body twist per second of the IMU frame (constant velocity)
+  std::vector<ImuSample> imu_;
+  double last_imu_stamp_ = -1e300;
+  double last_stamp_ = 0.0;
+  bool initialized_ = false;
+  std::size_t num_frames_ = 0;
+  std::size_t num_imu_dropped_ = 0;
+  VoxelHashMap edge_map_, plane_map_, point_map_;
+  // Search structures over the maps, rebuilt as map_rebuild_* say.
+  std::optional<LoamMap> loam_tree_;
+  PointCloud point_cloud_;
+  std::optional<KdTree3f> point_tree_;
+  Vector3d loam_built_at_ = Vector3d::Zero(), point_built_at_ = Vector3d::Zero();
+  std::size_t loam_built_frame_ = 0, point_built_frame_ = 0;
+};
+
+}  // namespace plumb

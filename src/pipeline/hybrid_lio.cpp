@@ -1,0 +1,599 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "plumb/pipeline/hybrid_lio.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+#include <Eigen/Cholesky>
+
+#include "plumb/core/error.hpp"
+#include "plumb/core/lie.hpp"
+#include "plumb/loam/odometry.hpp"
+#include "plumb/search/kdtree.hpp"
+
+namespace plumb {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr int kDimJoint = 30;
+using Vector30d = Eigen::Matrix<double, kDimJoint, 1>;
+using Matrix30d = Eigen::Matrix<double, kDimJoint, kDimJoint>;
+
+Eigen::Isometry3d pose_of(const ImuState& s) { return se3::make(s.R_world_body, s.p_world_body); }
+
+/// x (-) m in ImuTangent order (rotation as log(R_m^T R_x)).
+Vector15d state_error(const ImuState& x, const ImuState& m) {
+  Vector15d e;
+  e.segment<3>(ImuTangent::kR) = so3::log(m.R_world_body.transpose() * x.R_world_body);
+  e.segment<3>(ImuTangent::kP) = x.p_world_body - m.p_world_body;
+  e.segment<3>(ImuTangent::kV) = x.v_world - m.v_world;
+  e.segment<3>(ImuTangent::kBg) = x.bias.gyro - m.bias.gyro;
+  e.segment<3>(ImuTangent::kBa) = x.bias.accel - m.bias.accel;
+  return e;
+}
+
+/// Huber rho on a squared whitened norm s (RobustLoss convention: rho(s) = s inside the scale).
+double huber_rho(double s, double k) { return s <= k * k ? s : 2.0 * k * std::sqrt(s) - k * k; }
+double huber_weight(double s, double k) { return s <= k * k ? 1.0 : k / std::sqrt(s); }
+
+/// The LiDAR residuals of SEEDS eq. 6, 7, 20 as functions of the IMU state j: a query point s in
+/// the IMU frame maps to q = R s + p; Jacobians w.r.t. [dphi, dp] (right perturbation of R, p + dp).
+/// Returns 1/2 sum rho; adds the IRLS-weighted normal equations when H is not null.
+double lidar_terms(const std::vector<LoamCorrespondence>& corr, const std::vector<Vector3d>& s_imu, const ImuState& x,
+                   const HybridLioSettings& set, Matrix6d* H, Vector6d* g, double* sum_sq) {
+  const Matrix3d& R = x.R_world_body;
+  const Vector3d& p = x.p_world_body;
+  double cost = 0.0;
+  Eigen::Matrix<double, 3, 6> Jq;
+  for (std::size_t k = 0; k < corr.size(); ++k) {
+    const LoamCorrespondence& c = corr[k];
+    const Vector3d q = R * s_imu[k] + p;
+    if (H != nullptr) {
+      Jq.leftCols<3>() = -R * hat(s_imu[k]);
+      Jq.rightCols<3>().setIdentity();
+    }
+    if (c.kind == LoamCorrespondence::Kind::kPlane) {
+      const double inv = 1.0 / set.plane_sigma;
+      const double r = inv * c.dir.dot(q - c.a);
+      const double s = r * r;
+      cost += 0.5 * huber_rho(s, set.huber_scale);
+      if (H != nullptr) {
+        const Matrix16d J = inv * c.dir.transpose() * Jq;
+        const double w = huber_weight(s, set.huber_scale);
+        H->noalias() += w * J.transpose() * J;
+        g->noalias() += w * J.transpose() * r;
+        *sum_sq += s * set.plane_sigma * set.plane_sigma;
+      }
+    } else {
+      const bool edge = c.kind == LoamCorrespondence::Kind::kEdge;
+      const double sigma = edge ? set.edge_sigma : set.point_sigma;
+      const double inv = 1.0 / sigma;
+      const Vector3d r = edge ? Vector3d(inv * c.dir.cross(q - c.a)) : Vector3d(inv * (q - c.a));
+      const double s = r.squaredNorm();
+      cost += 0.5 * huber_rho(s, set.huber_scale);
+      if (H != nullptr) {
+        const Matrix36d J = edge ? Matrix36d(inv * hat(c.dir) * Jq) : Matrix36d(inv * Jq);
+        const double w = huber_weight(s, set.huber_scale);
+        H->noalias() += w * J.transpose() * J;
+        g->noalias() += w * J.transpose() * r;
+        *sum_sq += s * sigma * sigma;
+      }
+    }
+  }
+  return cost;
+}
+
+void check_map_settings(const VoxelHashMapSettings& m, const char* name) {
+  PLUMB_CHECK(std::isfinite(m.voxel_size) && m.voxel_size > 0.0 && m.max_points_per_voxel >= 1 &&
+                  m.max_distance > 0.0 && m.max_voxels >= 1,
+              "HybridLio: settings." << name << " needs voxel_size > 0, max_points_per_voxel >= 1, max_distance > 0");
+}
+
+}  // namespace
+
+LioMode lio_mode_from_string(const std::string& name) {
+  if (name == "loam") return LioMode::kLoam;
+  if (name == "loam-imu") return LioMode::kLoamImu;
+  if (name == "hybrid") return LioMode::kHybrid;
+  PLUMB_THROW("unknown LIO mode '" << name << "' (known: loam, loam-imu, hybrid)");
+}
+
+const char* to_string(LioMode mode) {
+  switch (mode) {
+    case LioMode::kLoam: return "loam";
+    case LioMode::kLoamImu: return "loam-imu";
+    case LioMode::kHybrid: return "hybrid";
+  }
+  return "unknown";
+}
+
+const char* to_string(LioFrameMode mode) {
+  switch (mode) {
+    case LioFrameMode::kInit: return "init";
+    case LioFrameMode::kLoam: return "loam";
+    case LioFrameMode::kIcp: return "icp";
+    case LioFrameMode::kPrediction: return "prediction";
+    case LioFrameMode::kSkipped: return "skipped";
+  }
+  return "unknown";
+}
+
+HybridLio::HybridLio(const Eigen::Isometry3d& T_world_base0, const HybridLioSettings& s)
+    : settings_(s), edge_map_(s.edge_map), plane_map_(s.plane_map), point_map_(s.point_map) {
+  PLUMB_CHECK(T_world_base0.matrix().allFinite(), "HybridLio: the initial pose is not finite");
+  PLUMB_CHECK(s.T_base_lidar.matrix().allFinite() && s.T_base_imu.matrix().allFinite(),
+              "HybridLio: settings.T_base_lidar / T_base_imu are not finite");
+  PLUMB_CHECK(s.max_iterations >= 1, "HybridLio: settings.max_iterations must be >= 1, got " << s.max_iterations);
+  PLUMB_CHECK(s.max_correspondence_distance > 0.0 && std::isfinite(s.max_correspondence_distance),
+              "HybridLio: settings.max_correspondence_distance must be > 0");
+  PLUMB_CHECK(s.map_neighbors >= 3 && s.map_neighbors <= 64,
+              "HybridLio: settings.map_neighbors must be in [3, 64], got " << s.map_neighbors);
+  PLUMB_CHECK(s.plane_sigma > 0.0 && s.edge_sigma > 0.0 && s.point_sigma > 0.0 && s.huber_scale > 0.0,
+              "HybridLio: settings.plane_sigma / edge_sigma / point_sigma / huber_scale must be > 0");
+  PLUMB_CHECK(s.min_correspondences >= 6, "HybridLio: settings.min_correspondences must be >= 6");
+  PLUMB_CHECK(s.icp_voxel_size > 0.0, "HybridLio: settings.icp_voxel_size must be > 0");
+  PLUMB_CHECK(s.gravity > 0.0 && std::isfinite(s.gravity), "HybridLio: settings.gravity must be > 0");
+  PLUMB_CHECK(s.max_imu_gap > 0.0, "HybridLio: settings.max_imu_gap must be > 0");
+  PLUMB_CHECK(s.map_rebuild_distance >= 0.0 && s.map_rebuild_frames >= 1,
+              "HybridLio: settings.map_rebuild_distance must be >= 0 and map_rebuild_frames >= 1");
+  PLUMB_CHECK(s.initial_velocity_sigma > 0.0 && s.initial_gyro_bias_sigma > 0.0 && s.initial_accel_bias_sigma > 0.0,
+              "HybridLio: settings.initial_*_sigma must be > 0");
+  PLUMB_CHECK(s.ground_max_slope_deg >= 0.0 && s.ground_max_slope_deg < 90.0,
+              "HybridLio: settings.ground_max_slope_deg must be in [0, 90)");
+  check_map_settings(s.edge_map, "edge_map");
+  check_map_settings(s.plane_map, "plane_map");
+  check_map_settings(s.point_map, "point_map");
+  T_imu_lidar_ = s.T_base_imu.inverse() * s.T_base_lidar;
+  const Eigen::Isometry3d T_world_imu = T_world_base0 * s.T_base_imu;
+  state_.R_world_body = T_world_imu.linear();
+  state_.p_world_body = T_world_imu.translation();
+  reset_prior();
+}
+
+void HybridLio::reset_prior() {
+  const HybridLioSettings& s = settings_;
+  Vector15d sigma;
+  sigma << Vector3d::Constant(1e-3), Vector3d::Constant(1e-2), Vector3d::Constant(s.initial_velocity_sigma),
+      Vector3d::Constant(s.initial_gyro_bias_sigma), Vector3d::Constant(s.initial_accel_bias_sigma);
+  prior_information_ = sigma.cwiseInverse().cwiseAbs2().asDiagonal();
+}
+
+Eigen::Isometry3d HybridLio::T_world_base() const { return pose_of(state_) * settings_.T_base_imu.inverse(); }
+
+Status HybridLio::add_imu(const ImuSample& sample) {
+  if (!std::isfinite(sample.stamp) || !sample.gyro.allFinite() || !sample.accel.allFinite() ||
+      !(sample.stamp > last_imu_stamp_)) {
+    ++num_imu_dropped_;
+    return Status::kInvalidInput;
+  }
+  imu_.push_back(sample);
+  last_imu_stamp_ = sample.stamp;
+  return Status::kOk;
+}
+
+bool HybridLio::imu_covers(double t0, double t1) const {
+  if (imu_.empty()) return false;
+  auto it = std::upper_bound(imu_.begin(), imu_.end(), t0, [](double t, const ImuSample& s) { return t < s.stamp; });
+  std::size_t a = static_cast<std::size_t>(it - imu_.begin());
+  if (a == 0) {
+    if (imu_.front().stamp - t0 > settings_.max_imu_gap) return false;
+  } else {
+    --a;
+    if (t0 - imu_[a].stamp > settings_.max_imu_gap) return false;
+  }
+  for (std::size_t k = a; k + 1 < imu_.size() && imu_[k].stamp < t1; ++k) {
+    if (imu_[k + 1].stamp - imu_[k].stamp > settings_.max_imu_gap) return false;
+  }
+  return t1 - imu_.back().stamp <= settings_.max_imu_gap;
+}
+
+void HybridLio::deskew(PointCloud& cloud, double stamp, const ImuState& x, bool use_imu, LioFrameResult& res) const {
+  if (!settings_.deskew || !cloud.has_times()) return;
+  double t_max = 0.0;
+  for (float t : cloud.times) {
+    if (std::isfinite(t) && t > t_max) t_max = t;
+  }
+  t_max = std::min(t_max, 1.0);
+  if (!(t_max > 0.0)) return;
+  // Knots: times since the stamp and poses of the IMU at that time in the IMU frame at the stamp.
+  std::vector<double> kt{0.0};
+  std::vector<Matrix3d> kR{Matrix3d::Identity()};
+  std::vector<Vector3d> kp{Vector3d::Zero()};
+  if (use_imu && imu_covers(stamp, stamp + t_max)) {
+    const Vector3d g(0.0, 0.0, -settings_.gravity);
+    Matrix3d R = x.R_world_body;
+    Vector3d p = x.p_world_body, v = x.v_world;
+    const Matrix3d R0t = R.transpose();
+    const Vector3d p0 = p;
+    auto it = std::upper_bound(imu_.begin(), imu_.end(), stamp, [](double t, const ImuSample& s) { return t < s.stamp; });
+    std::size_t k = it == imu_.begin() ? 0 : static_cast<std::size_t>(it - imu_.begin()) - 1;
+    double t = stamp;
+    const double t_end = stamp + t_max;
+    while (t < t_end) {
+      const double t_next = std::min(k + 1 < imu_.size() ? imu_[k + 1].stamp : t_end, t_end);
+      const double dt = t_next - t;
+      if (dt > 0.0) {
+        const Vector3d w = imu_[k].gyro - x.bias.gyro;
+        const Vector3d a = R * (imu_[k].accel - x.bias.accel) + g;
+        p += v * dt + 0.5 * a * dt * dt;
+        v += a * dt;
+        R = R * so3::exp(w * dt);
+        t = t_next;
+        kt.push_back(t - stamp);
+        kR.push_back(R0t * R);
+        kp.push_back(R0t * (p - p0));
+      }
+      if (k + 1 < imu_.size() && imu_[k + 1].stamp <= t) ++k;
+      else if (dt <= 0.0) break;
+    }
+    res.deskewed_with_imu = true;
+  } else {
+    // Constant velocity: the body twist of the last interval.
+    const int n = std::max(2, static_cast<int>(std::ceil(t_max / 0.005)));
+    for (int i = 1; i <= n; ++i) {
+      const double t = t_max * i / n;
+      const Eigen::Isometry3d T = se3::exp(twist_ * t);
+      kt.push_back(t);
+      kR.push_back(T.linear());
+      kp.push_back(T.translation());
+    }
+  }
+  const Eigen::Isometry3d T_lidar_imu = T_imu_lidar_.inverse();
+  float last = std::numeric_limits<float>::quiet_NaN();
+  Eigen::Matrix3f Rf = Eigen::Matrix3f::Identity();
+  Eigen::Vector3f tf = Eigen::Vector3f::Zero();
+  for (std::size_t i = 0; i < cloud.points.size(); ++i) {
+    const float ti = cloud.times[i];
+    if (!std::isfinite(ti)) continue;
+    if (ti != last) {
+      const double t = std::clamp(static_cast<double>(ti), 0.0, t_max);
+      std::size_t j = static_cast<std::size_t>(std::upper_bound(kt.begin(), kt.end(), t) - kt.begin());
+      j = std::clamp<std::size_t>(j, 1, kt.size() - 1);
+      const double span = kt[j] - kt[j - 1];
+      const double f = span > 0.0 ? std::clamp((t - kt[j - 1]) / span, 0.0, 1.0) : 1.0;
+      const Matrix3d Ri = kR[j - 1] * so3::exp(f * so3::log(kR[j - 1].transpose() * kR[j]));
+      const Vector3d pi = (1.0 - f) * kp[j - 1] + f * kp[j];
+      const Eigen::Isometry3d T = T_lidar_imu * se3::make(Ri, pi) * T_imu_lidar_;
+      Rf = T.linear().cast<float>();
+      tf = T.translation().cast<float>();
+      last = ti;
+    }
+    cloud.points[i] = Rf * cloud.points[i] + tf;
+  }
+  res.deskewed = true;
+}
+
+void HybridLio::update_maps(const LoamFeatures& f, const PointCloud& cloud, const Eigen::Isometry3d& T_world_lidar) {
+  const Eigen::Matrix3f R = T_world_lidar.linear().cast<float>();
+  const Eigen::Vector3f t = T_world_lidar.translation().cast<float>();
+  auto world = [&](std::vector<Vector3f> pts) {
+    for (Vector3f& p : pts) p = R * p + t;
+    return pts;
+  };
+  if (!f.edge_pool.empty()) {
+    edge_map_.insert(world(f.edge_pool.points));
+  } else {
+    edge_map_.insert(world(f.edges.points));
+    edge_map_.insert(world(f.edge_candidates.points));
+  }
+  if (!f.plane_pool.empty()) {
+    plane_map_.insert(world(f.plane_pool.points));
+  } else {
+    plane_map_.insert(world(f.planes.points));
+    plane_map_.insert(world(f.plane_candidates.points));
+  }
+  point_map_.insert(world(cloud.points));
+  const Vector3d c = T_world_lidar.translation();
+  edge_map_.prune(c);
+  plane_map_.prune(c);
+  point_map_.prune(c);
+}
+
+LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
+  const auto t_start = std::chrono::steady_clock::now();
+  frame_lidar.check_consistent("HybridLio::process");
+  const HybridLioSettings& set = settings_;
+  LioFrameResult res;
+  res.stamp = stamp;
+  res.num_points = frame_lidar.size();
+  auto finish = [&](LioFrameResult& r) {
+    r.T_world_base = T_world_base();
+    r.v_world = state_.v_world;
+    r.bias = state_.bias;
+    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+    return r;
+  };
+  if (!std::isfinite(stamp) || (initialized_ && !(stamp > last_stamp_))) {
+    res.mode = LioFrameMode::kSkipped;
+    res.status = Status::kInvalidInput;
+    return finish(res);
+  }
+  const bool imu_mode = set.mode != LioMode::kLoam;
+  const double dt = initialized_ ? stamp - last_stamp_ : 0.0;
+
+  // 1. Prediction: IMU preintegration from the previous frame, or constant velocity.
+  PreintegrationSettings pis;
+  pis.noise = set.imu_noise;
+  pis.g_world = Vector3d(0.0, 0.0, -set.gravity);
+  pis.max_gap = set.max_imu_gap;
+  std::optional<ImuPreintegration> pim;
+  ImuState pred = state_;
+  if (initialized_) {
+    if (imu_mode) {
+      pim.emplace(state_.bias, pis);
+      if (pim->integrate(imu_, last_stamp_, stamp) == Status::kOk && pim->num_measurements() > 0) {
+        pred = pim->predict(state_);
+      } else {
+        pim.reset();
+        res.imu_gap = true;
+      }
+    }
+    if (!pim) {
+      const Eigen::Isometry3d T = pose_of(state_) * se3::exp(twist_ * dt);
+      pred.R_world_body = T.linear();
+      pred.p_world_body = T.translation();
+    }
+  }
+  res.imu_used = pim.has_value();
+
+  // 2. Deskew to the stamp, then range image and cosine features (SEEDS B1.1-1.2).
+  PointCloud cloud = frame_lidar;
+  if (imu_mode) deskew(cloud, stamp, pred, pim.has_value() || !initialized_, res);
+  const RangeImage image = build_range_image(cloud, set.image);
+  LoamFeatures feats = extract_loam_features(cloud, image, set.features);
+  res.num_plane_points = feats.planes.size();
+  res.num_edge_points = feats.edges.size();
+  res.num_plane_interval = feats.num_plane_interval;
+  res.num_edge_interval = feats.num_edge_interval;
+
+  // Ground (LeGO-LOAM): vertically adjacent returns below the horizon joined by a flat segment.
+  std::vector<char> ground(cloud.size(), 0);
+  {
+    const Matrix3d R_wl = pred.R_world_body * T_imu_lidar_.linear();
+    const double slope = std::tan(set.ground_max_slope_deg * kPi / 180.0);
+    for (int r = 0; r + 1 < image.num_rows; ++r) {
+      if (!(image.row_elevation[static_cast<std::size_t>(r)] < 0.0)) continue;
+      for (int c = 0; c < image.num_columns; ++c) {
+        const std::int32_t i0 = image.at(r, c), i1 = image.at(r + 1, c);
+        if (i0 < 0 || i1 < 0) continue;
+        const Vector3d d = R_wl * (cloud.points[static_cast<std::size_t>(i1)] -
+                                   cloud.points[static_cast<std::size_t>(i0)]).cast<double>();
+        if (std::abs(d.z()) <= slope * d.head<2>().norm()) {
+          ground[static_cast<std::size_t>(i0)] = 1;
+          ground[static_cast<std::size_t>(i1)] = 1;
+        }
+      }
+    }
+    for (std::size_t i : feats.plane_indices) res.num_structure_planes += ground[i] ? 0 : 1;
+  }
+  // Edges only off the ground (LeGO-LOAM): on the road, range noise makes "corners" along a ring,
+  // and lines fitted to them run along the ring circles, which pulls every frame onto the last.
+  auto off_ground = [&](const std::vector<std::size_t>& idx) {
+    std::vector<std::size_t> keep;
+    for (std::size_t i : idx) {
+      if (!ground[i]) keep.push_back(i);
+    }
+    PointCloud out;
+    for (std::size_t i : keep) out.points.push_back(cloud.points[i]);
+    return out;
+  };
+  feats.edges = off_ground(feats.edge_indices);
+  feats.edge_candidates = off_ground(feats.edge_candidate_indices);
+  feats.edge_pool.clear();
+  res.num_edge_points = feats.edges.size();
+
+  // ICP queries: the frame, one point per voxel.
+  PointCloud icp_points;
+  {
+    VoxelHashMap ds({set.icp_voxel_size, 1, 1e12, std::numeric_limits<std::size_t>::max()});
+    // Off the ground only: nearest-point pairs on the rings of a flat road pull the frame back
+    // onto the last one (the rings barely move with the sensor); height, roll and pitch come from
+    // the IMU and the previous state.
+    std::vector<Vector3f> off;
+    off.reserve(cloud.size());
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      if (!ground[i]) off.push_back(cloud.points[i]);
+    }
+    ds.insert(off);
+    icp_points.points = ds.points();
+  }
+
+  if (!initialized_) {
+    initialized_ = true;
+    last_stamp_ = stamp;
+    ++num_frames_;
+    res.mode = LioFrameMode::kInit;
+    res.status = feats.status;
+    update_maps(feats, icp_points, pose_of(state_) * T_imu_lidar_);
+    return finish(res);
+  }
+
+  // 3. The hybrid switch (SEEDS B3.2).
+  LioFrameMode lidar_mode = LioFrameMode::kLoam;
+  if (set.mode == LioMode::kHybrid && res.num_structure_planes < set.min_plane_points) lidar_mode = LioFrameMode::kIcp;
+
+  LoamSettings ls;
+  ls.max_correspondence_distance = set.max_correspondence_distance;
+  ls.map_neighbors = set.map_neighbors;
+  ls.map_plane_tolerance = set.map_plane_tolerance;
+  ls.map_edge_ratio = set.map_edge_ratio;
+  ls.map_plane_ratio = set.map_plane_ratio;
+  const Vector3d here = (pose_of(pred) * T_imu_lidar_).translation();
+  auto stale = [&](const Vector3d& at, std::size_t frame) {
+    return (here - at).norm() > set.map_rebuild_distance ||
+           num_frames_ - frame >= static_cast<std::size_t>(set.map_rebuild_frames);
+  };
+  auto associate = [&](LioFrameMode m, const ImuState& x, std::vector<LoamCorrespondence>& corr) {
+    corr.clear();
+    const Eigen::Isometry3d T_world_lidar = pose_of(x) * T_imu_lidar_;
+    if (m == LioFrameMode::kLoam) {
+      if (!loam_tree_ || stale(loam_built_at_, loam_built_frame_)) {
+        PointCloud e, p;
+        e.points = edge_map_.points();
+        p.points = plane_map_.points();
+        loam_tree_.emplace(std::move(e), std::move(p));
+        loam_built_at_ = here;
+        loam_built_frame_ = num_frames_;
+      }
+      loam_associate_map(*loam_tree_, feats, T_world_lidar, ls, corr);
+    } else {
+      if (!point_tree_ || stale(point_built_at_, point_built_frame_)) {
+        point_tree_.reset();
+        point_cloud_.points = point_map_.points();
+        point_tree_.emplace(point_cloud_);
+        point_built_at_ = here;
+        point_built_frame_ = num_frames_;
+      }
+      loam_associate_points(point_cloud_, *point_tree_, icp_points, T_world_lidar, set.max_correspondence_distance,
+                            corr);
+    }
+  };
+
+  // 4. Joint problem over x_i (offset 0) and x_j (offset 15) with the IMU factor, or over the
+  //    pose of x_j alone (offset 0) without it (SEEDS B eq. 19-22).
+  const bool with_imu = pim.has_value();
+  const int oj = with_imu ? 15 : 0;
+  const int n = with_imu ? 30 : 6;
+  Matrix15d U = Matrix15d::Zero();
+  if (with_imu) U = pim->sqrt_information_with_bias();
+  const ImuState prior_mean = state_;
+  ImuState xi = state_, xj = pred;
+  std::vector<LoamCorrespondence> corr;
+  std::vector<Vector3d> s_imu;
+  auto build = [&](const ImuState& a, const ImuState& b, Matrix30d* H, Vector30d* g, double* sum_sq) {
+    double cost = 0.0;
+    if (H != nullptr) { H->setZero(); g->setZero(); *sum_sq = 0.0; }
+    if (with_imu) {
+      const Vector15d e = state_error(a, prior_mean);
+      cost += 0.5 * e.dot(prior_information_ * e);
+      const ImuFactorResidual f = pim->residual(a, b);
+      const Vector15d r = U * f.r;
+      cost += 0.5 * r.squaredNorm();
+      if (H != nullptr) {
+        H->topLeftCorner<15, 15>() += prior_information_;
+        g->head<15>() += prior_information_ * e;
+        Eigen::Matrix<double, 15, 30> J;
+        J.leftCols<15>() = U * f.J_r_xi_i;
+        J.rightCols<15>() = U * f.J_r_xi_j;
+        H->noalias() += J.transpose() * J;
+        g->noalias() += J.transpose() * r;
+      }
+    }
+    Matrix6d Hl = Matrix6d::Zero();
+    Vector6d gl = Vector6d::Zero();
+    cost += lidar_terms(corr, s_imu, b, set, H != nullptr ? &Hl : nullptr, &gl, sum_sq);
+    if (H != nullptr) {
+      H->block<6, 6>(oj, oj) += Hl;
+      g->segment<6>(oj) += gl;
+    }
+    return cost;
+  };
+  auto step_states = [&](const Vector30d& delta, ImuState& a, ImuState& b) {
+    if (with_imu) {
+      a = retract(xi, delta.head<15>());
+      b = retract(xj, delta.tail<15>());
+    } else {
+      Vector15d d = Vector15d::Zero();
+      d.head<6>() = delta.head<6>();
+      a = xi;
+      b = retract(xj, d);
+    }
+  };
+
+  bool lidar_ok = true;
+  bool tried_icp = lidar_mode == LioFrameMode::kIcp;
+  bool converged = false;
+  double lambda = 1e-4;
+  Matrix30d H;
+  Vector30d g;
+  double sum_sq = 0.0;
+  for (int it = 0; it < set.max_iterations; ++it) {
+    if (lidar_ok) {
+      associate(lidar_mode, xj, corr);
+      if (corr.size() < set.min_correspondences) {
+        if (set.mode == LioMode::kHybrid && !tried_icp) {  // hybrid: LOAM found too little, try ICP
+          tried_icp = true;
+          lidar_mode = LioFrameMode::kIcp;
+          associate(lidar_mode, xj, corr);
+        }
+        if (corr.size() < set.min_correspondences) {
+          lidar_ok = false;
+          corr.clear();
+          if (!with_imu) break;
+        }
+      }
+      s_imu.resize(corr.size());
+      for (std::size_t k = 0; k < corr.size(); ++k) s_imu[k] = T_imu_lidar_ * corr[k].p;
+    }
+    res.iterations = it + 1;
+    const double cost = build(xi, xj, &H, &g, &sum_sq);
+    res.num_correspondences = corr.size();
+    res.rmse = corr.empty() ? 0.0 : std::sqrt(sum_sq / static_cast<double>(corr.size()));
+    bool accepted = false;
+    Vector30d delta = Vector30d::Zero();
+    for (int attempt = 0; attempt < 10 && !accepted; ++attempt) {
+      Eigen::MatrixXd A = H.topLeftCorner(n, n);
+      for (int d = 0; d < n; ++d) A(d, d) += lambda * std::max(A(d, d), 1e-9);
+      delta.head(n) = A.ldlt().solve(-g.head(n));
+      if (!delta.allFinite()) break;
+      ImuState a, b;
+      step_states(delta, a, b);
+      if (build(a, b, nullptr, nullptr, nullptr) <= cost) {
+        xi = a;
+        xj = b;
+        accepted = true;
+        lambda = std::max(lambda * 0.1, 1e-12);
+      } else {
+        lambda = std::min(lambda * 10.0, 1e12);
+      }
+    }
+    const Vector6d dj = delta.segment<6>(oj);
+    if (!accepted || (dj.head<3>().norm() < set.min_step_rotation && dj.tail<3>().norm() < set.min_step_translation)) {
+      converged = true;
+      break;
+    }
+  }
+
+  // 5. Outcome, marginal prior for the next frame, map update.
+  if (lidar_ok) {
+    res.mode = lidar_mode;
+    res.status = converged ? Status::kOk : Status::kNotConverged;
+  } else {
+    res.mode = LioFrameMode::kPrediction;
+    res.status = Status::kInsufficientData;
+    if (!with_imu) xj = pred;
+  }
+  if (with_imu) {
+    build(xi, xj, &H, &g, &sum_sq);
+    const Matrix15d Hii = H.topLeftCorner<15, 15>();
+    const Eigen::Matrix<double, 15, 15> Hij = H.topRightCorner<15, 15>();
+    const Eigen::LDLT<Matrix15d> ldlt(Hii);
+    Matrix15d L = H.bottomRightCorner<15, 15>() - Hij.transpose() * ldlt.solve(Hij);
+    L = 0.5 * (L + L.transpose()).eval();
+    L.diagonal().array() += 1e-9;
+    if (L.allFinite()) prior_information_ = L;
+    else reset_prior();
+  } else {
+    xj.v_world = (xj.p_world_body - state_.p_world_body) / dt;
+    xj.bias = state_.bias;
+    reset_prior();
+  }
+  const Eigen::Isometry3d T_prev = pose_of(state_);
+  state_ = xj;
+  twist_ = se3::log(T_prev.inverse() * pose_of(state_)) / dt;
+  last_stamp_ = stamp;
+  ++num_frames_;
+  if (lidar_ok) update_maps(feats, icp_points, pose_of(state_) * T_imu_lidar_);
+
+  // Keep the IMU buffer bounded: samples older than a second before this frame are not needed.
+  if (imu_.size() > 4096) {
+    auto it = std::upper_bound(imu_.begin(), imu_.end(), stamp - 1.0, [](double t, const ImuSample& s) { return t < s.stamp; });
+    if (it - imu_.begin() > 2048) imu_.erase(imu_.begin(), it);
+  }
+  return finish(res);
+}
+
+}  // namespace plumb
