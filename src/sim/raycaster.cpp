@@ -506,9 +506,22 @@ RayHit RayCaster::traverse(const Vector3d& origin, const Vector3d& dir, double t
     const unsigned mask = test_boxes(nd, box_ray, best_f, t_near);
     // Triangles first: the exact test (Woop et al. 2013, sec. 3) in double.
     unsigned tri = mask & nd.triangle_mask;
+    // Nearest box first, so a hit culls the triangles behind it.
+    int order[4];
+    int num_tri = 0;
     while (tri != 0) {
       const int s = __builtin_ctz(tri);
       tri &= tri - 1;
+      int j = num_tri++;
+      while (j > 0 && t_near[order[j - 1]] > t_near[s]) {
+        order[j] = order[j - 1];
+        --j;
+      }
+      order[j] = s;
+    }
+    for (int i = 0; i < num_tri; ++i) {
+      const int s = order[i];
+      if (t_near[s] > best_f) break;  // behind a hit found in this node
       const std::uint32_t slot = nd.child[s] & ~kTriangleBit;
       const double* v = leaf_vertices_.data() + 9 * static_cast<std::size_t>(slot);
       const double ax = v[kx] - ox, ay = v[ky] - oy, az = v[kz] - oz;
