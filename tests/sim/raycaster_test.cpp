@@ -220,6 +220,42 @@ TEST(RayCasterTest, MatchesBruteForceOnFzkHaus) {
   }
 }
 
+TEST(RayCasterTest, CoincidentCentroidsAndLargeLeavesMatchBruteForce) {
+  // 600 triangles whose boxes share one centre (no spatial split separates them: median splits, then leaves
+  // chunked into 4-wide nodes) inside a closed box, for the smallest and the largest leaf size.
+  std::vector<Vector3d> v;
+  std::vector<Tri> t;
+  std::vector<std::int32_t> e;
+  box_mesh(Vector3d(-3, -3, -3), Vector3d(3, 3, 3), v, t, e);
+  Rng rng(5);
+  for (int i = 0; i < 600; ++i) {
+    const Vector3d a = random_unit(rng) * rng.uniform(0.2, 1.5);
+    const Vector3d c = a.cwiseProduct(Vector3d(rng.uniform(-0.9, 0.9), rng.uniform(-0.9, 0.9), rng.uniform(-0.9, 0.9)));
+    const auto base = static_cast<std::uint32_t>(v.size());
+    v.push_back(a);
+    v.push_back(-a);
+    v.push_back(c);  // bounding box symmetric about the origin: its centre is the origin
+    t.push_back({base, base + 1, base + 2});
+    e.push_back(100 + i);
+  }
+  for (int leaf : {1, 255}) {
+    RayCasterSettings s;
+    s.leaf_size = leaf;
+    const RayCaster caster(v, t, e, s);
+    for (int i = 0; i < 400; ++i) {
+      const Vector3d o(rng.uniform(-2.5, 2.5), rng.uniform(-2.5, 2.5), rng.uniform(-2.5, 2.5));
+      const Vector3d d = random_unit(rng);
+      const double expected = brute_force_range(v, t, o, d);
+      const RayHit h = caster.cast(o, d);
+      ASSERT_TRUE(h.hit()) << i;  // inside a closed box
+      EXPECT_NEAR(h.range, expected, 1e-9) << "ray " << i << " leaf " << leaf;
+      EXPECT_NEAR(brute_force_range(v, {t[h.triangle]}, o, d), h.range, 1e-9);
+      EXPECT_TRUE(caster.occluded(o, d, h.range * (1.0 + 1e-9)));
+      EXPECT_FALSE(caster.occluded(o, d, h.range * (1.0 - 1e-9)));
+    }
+  }
+}
+
 TEST(RayCasterTest, ConcurrentCastsAgree) {
   std::vector<Vector3d> v;
   std::vector<Tri> t;
