@@ -365,5 +365,57 @@ TEST(IcpTest, Deterministic) {
   EXPECT_EQ(a.rmse, b.rmse);
 }
 
+// The per-point query cache of align_icp (bounded searches, skipped far points) only prunes: the
+// iterates must equal a plain ICP written here with brute-force nearest neighbours, also when
+// most of the source lies outside the correspondence distance (clutter beyond the room).
+TEST(IcpTest, MatchesBruteForceIcpWithFarPoints) {
+  const PointCloud target = room_cloud(0.15, 3);
+  Rng rng(11);
+  PointCloud source = room_cloud(0.2, 4);
+  for (int i = 0; i < 600; ++i)  // far clutter: 2-5 m outside the room
+    source.points.emplace_back(static_cast<float>(rng.uniform(8, 11)), static_cast<float>(rng.uniform(-3, 7)),
+                               static_cast<float>(rng.uniform(0, 3)));
+  source.normals.clear();
+  const Eigen::Isometry3d T_init = random_pose(rng, 0.15, 0.05);
+  IcpSettings s;
+  s.max_correspondence_distance = 0.5;
+  s.min_correspondence_distance = 0.5;
+  s.max_iterations = 12;
+  s.tolerance = 0.0;  // run all iterations
+  s.min_step = 0.0;
+  s.min_overlap = 0.0;
+  const IcpResult r = align_icp(source, target, T_init, s);
+  ASSERT_EQ(r.iterations, 12);
+
+  Eigen::Isometry3d T = T_init;
+  for (int it = 0; it < 12; ++it) {
+    const Eigen::Matrix3f R = T.linear().cast<float>();
+    const Eigen::Vector3f t = T.translation().cast<float>();
+    std::vector<Vector3d> ps, qs;
+    for (const Vector3f& p : source.points) {
+      const Vector3f x = R * p + t;
+      float best = 0.25f;  // d^2
+      int best_j = -1;
+      for (std::size_t j = 0; j < target.size(); ++j) {
+        const float dd = (target.points[j] - x).squaredNorm();
+        if (dd <= best) {
+          best = dd;
+          best_j = static_cast<int>(j);
+        }
+      }
+      if (best_j < 0) continue;
+      ps.push_back(x.cast<double>());
+      qs.push_back(target.points[static_cast<std::size_t>(best_j)].cast<double>());
+    }
+    const HornResult h = horn_align(ps, qs);
+    ASSERT_TRUE(h.valid);
+    T = h.T_target_source * T;
+    T.linear() = Eigen::Quaterniond(T.linear()).normalized().toRotationMatrix();
+  }
+  const auto e = pose_error(r.T_target_source, T);
+  EXPECT_LT(e.first, 1e-6);
+  EXPECT_LT(e.second, 1e-6);
+}
+
 }  // namespace
 }  // namespace plumb

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -40,18 +42,28 @@ TEST(FeatureKnnTest, MatchesBruteForce) {
   const std::size_t k = 6;
   const std::vector<std::uint32_t> got = feature_knn(q, qi, d, di, k);
   ASSERT_EQ(got.size(), q.size() * k);
+  // Oracle: brute force in double. The tree works on rotated vectors (float rounding differs by
+  // ~1e-6 relative), so the m-th distance must match, and the index too unless two distances are
+  // that close.
+  auto dist = [&](const FpfhSignature& a, const FpfhSignature& b) {
+    double sum = 0.0;
+    for (int t = 0; t < kFpfhBins; ++t) sum += (double(a[t]) - double(b[t])) * (double(a[t]) - double(b[t]));
+    return sum;
+  };
   for (std::size_t a = 0; a < q.size(); ++a) {
-    std::vector<std::pair<float, std::size_t>> all;
-    for (std::size_t j : di) {
-      float s = 0;
-      for (int b = 0; b < kFpfhBins; ++b) s += (q[a][b] - d[j][b]) * (q[a][b] - d[j][b]);
-      all.push_back({s, j});
-    }
+    std::vector<std::pair<double, std::size_t>> all;
+    for (std::size_t j : di) all.push_back({dist(q[a], d[j]), j});
     std::sort(all.begin(), all.end());
-    for (std::size_t m = 0; m < k; ++m) ASSERT_EQ(got[a * k + m], all[m].second) << a << " " << m;
+    for (std::size_t m = 0; m < k; ++m) {
+      const double got_d = dist(q[a], d[got[a * k + m]]);
+      ASSERT_NEAR(got_d, all[m].first, 1e-5 * (1.0 + all[m].first)) << a << " " << m;
+      const bool near_tie = (m > 0 && all[m].first - all[m - 1].first < 1e-4 * (1.0 + all[m].first)) ||
+                            (m + 1 < all.size() && all[m + 1].first - all[m].first < 1e-4 * (1.0 + all[m].first));
+      if (!near_tie) {
+        ASSERT_EQ(got[a * k + m], all[m].second) << a << " " << m;
+      }
+    }
   }
-  EXPECT_EQ(got[0], 12u);  // tie at distance 0: smaller index first
-  EXPECT_EQ(got[1], 13u);
   const std::vector<std::size_t> bad = {5000};
   EXPECT_THROW(feature_knn(q, qi, d, bad, k), Error);
 }
@@ -141,6 +153,130 @@ TEST(SacIaTest, BadInput) {
   bad = s;
   bad.max_correspondence_distance = 0.001;  // below the Huber threshold
   EXPECT_THROW(align_sac_ia(b.source, b.fs, b.target, b.ft, tree, bad), Error);
+  bad = s;
+  bad.prescore_slack = -0.1;
+  EXPECT_THROW(align_sac_ia(b.source, b.fs, b.target, b.ft, tree, bad), Error);
+  bad = s;
+  bad.confidence = 0.0;
+  EXPECT_THROW(align_sac_ia(b.source, b.fs, b.target, b.ft, tree, bad), Error);
+  // Mutual filter on features that match nothing mutually still returns, never throws.
+  bad = s;
+  bad.mutual_filter = true;
+  EXPECT_NO_THROW(align_sac_ia(two, f2, b.target, b.ft, tree, bad));
+}
+
+TEST(FeatureKdTreeTest, ExactOnRealFpfhAndTiesToSmallerIndex) {
+  PLUMB_REQUIRE_DATA(p0, "cloud3d/pcl_test/bun0.pcd");
+  const Bunny b = load_bunny();
+  // Exact duplicates of a query: both at distance 0, smaller index first.
+  std::vector<FpfhSignature> data = b.ft;
+  data[20] = b.fs[7];
+  data[3] = b.fs[7];
+  std::vector<std::size_t> ids(data.size());
+  for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = i;
+  const FeatureKdTree<kFpfhBins> tree(data, ids);
+  ASSERT_EQ(tree.size(), data.size());
+  std::uint32_t idx[8];
+  float d2[8];
+  ASSERT_EQ(tree.knn(b.fs[7].data(), 8, idx, d2), 8u);
+  EXPECT_EQ(idx[0], 3u);
+  EXPECT_EQ(idx[1], 20u);
+  // Every 25th source signature against a brute force of the real target signatures.
+  for (std::size_t a = 0; a < b.fs.size(); a += 25) {
+    tree.knn(b.fs[a].data(), 8, idx, d2);
+    std::vector<float> all;
+    for (const auto& f : data) all.push_back(feature_distance_sq<kFpfhBins>(b.fs[a].data(), f.data()));
+    std::sort(all.begin(), all.end());
+    for (int m = 0; m < 8; ++m) {
+      ASSERT_NEAR(d2[m], all[static_cast<std::size_t>(m)], 1e-4f * (1.0f + all[static_cast<std::size_t>(m)])) << a;
+    }
+  }
+  std::vector<FpfhSignature> bad = data;
+  bad[5][2] = std::nanf("");
+  EXPECT_THROW(FeatureKdTree<kFpfhBins>(bad, ids), Error);
+  EXPECT_THROW(FeatureKdTree<kFpfhBins>(data, {data.size()}), Error);
+}
+
+/// The bunny against itself moved by a large transform: every signature has its exact twin.
+struct EasyCase {
+  PointCloud source, target;
+  std::vector<FpfhSignature> features;
+  Eigen::Isometry3d T_target_source;
+};
+
+/// RMS displacement [m] of the target points between two estimates (a coarse-stage error measure
+/// that does not depend on where the frame's origin is).
+double rms_offset(const PointCloud& cloud, const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  double sum = 0.0;
+  for (const Vector3f& p : cloud.points) sum += (a * p.cast<double>() - b * p.cast<double>()).squaredNorm();
+  return std::sqrt(sum / static_cast<double>(cloud.size()));
+}
+
+EasyCase easy_case() {
+  EasyCase e;
+  e.target = io::read_cloud(test::data_path("cloud3d/pcl_test/bun4.pcd"));
+  NormalSettings ns;
+  ns.k = 30;
+  ns.radius = 0.02f;
+  compute_normals(e.target, ns);
+  FpfhSettings f;
+  f.radius = 0.05f;
+  e.features = compute_fpfh(e.target, f).features;
+  Eigen::Isometry3d T_source_target = Eigen::Isometry3d::Identity();
+  T_source_target.linear() = Eigen::AngleAxisd(2.0, Vector3d(0.2, 0.3, 1.0).normalized()).toRotationMatrix();
+  T_source_target.translation() = Vector3d(3.0, -2.0, 0.5);
+  e.source = transformed(e.target, T_source_target);
+  e.T_target_source = T_source_target.inverse();
+  return e;
+}
+
+TEST(SacIaTest, EarlyTerminationStopsSoonerOnEasyCase) {
+  PLUMB_REQUIRE_DATA(p4, "cloud3d/pcl_test/bun4.pcd");
+  const EasyCase e = easy_case();
+  const KdTree3f tree(e.target);
+  SacIaSettings s = bunny_settings();
+  s.max_iterations = 3000;
+  const SacIaResult fast = align_sac_ia(e.source, e.features, e.target, e.features, tree, s);
+  s.confidence = 1.0;
+  const SacIaResult full = align_sac_ia(e.source, e.features, e.target, e.features, tree, s);
+  std::printf("easy: %d iterations (%zu feature queries) vs %d\n", fast.iterations, fast.num_feature_queries,
+              full.iterations);
+  EXPECT_TRUE(fast.converged);
+  EXPECT_EQ(fast.status, Status::kOk);
+  EXPECT_LT(fast.iterations, full.iterations / 5);
+  EXPECT_EQ(full.iterations, 3000);
+  EXPECT_FALSE(full.converged);
+  EXPECT_EQ(full.status, Status::kNotConverged);
+  EXPECT_LT(fast.num_feature_queries, e.source.size() / 2);  // candidates only for sampled points
+  // Both find the motion (a few samples' noise is left for ICP).
+  for (const SacIaResult* r : {&fast, &full}) EXPECT_LT(rms_offset(e.source, r->T_target_source, e.T_target_source), 0.01);
+  // The full run scored at least as well (it saw every hypothesis the fast one saw, and more).
+  EXPECT_LE(full.score, fast.score);
+}
+
+TEST(SacIaTest, PrescoringAndMutualFilterKeepResultAndDeterminism) {
+  PLUMB_REQUIRE_DATA(p4, "cloud3d/pcl_test/bun4.pcd");
+  const EasyCase e = easy_case();
+  const KdTree3f tree(e.target);
+  for (bool mutual : {false, true}) {
+    for (std::size_t pre : {std::size_t{0}, std::size_t{50}}) {
+      SacIaSettings s = bunny_settings();
+      s.mutual_filter = mutual;
+      s.num_prescore_points = pre;
+      const SacIaResult a = align_sac_ia(e.source, e.features, e.target, e.features, tree, s);
+      const SacIaResult b = align_sac_ia(e.source, e.features, e.target, e.features, tree, s);
+      EXPECT_EQ(a.T_target_source.matrix(), b.T_target_source.matrix()) << mutual << " " << pre;
+      EXPECT_EQ(a.iterations, b.iterations);
+      EXPECT_EQ(a.num_fully_scored, b.num_fully_scored);
+      if (pre == 0) {
+        EXPECT_EQ(a.num_fully_scored, a.num_scored);
+      } else {
+        EXPECT_LE(a.num_fully_scored, a.num_scored);
+      }
+      EXPECT_LT(rms_offset(e.source, a.T_target_source, e.T_target_source), 0.01) << mutual << " " << pre;
+      EXPECT_GT(a.overlap, 0.9);
+    }
+  }
 }
 
 TEST(LocalizeTest, BadInputGivesStatusNotCrash) {

@@ -35,6 +35,15 @@ struct SacIaSettings {
   /// Early termination: stop once the probability of having drawn an all-correct sample set,
   /// estimated from the best hypothesis, reaches this. 1 runs all max_iterations. In (0, 1].
   double confidence = 0.999;
+  /// Keep a candidate pair (source i, target j) only when i is also among the k most similar
+  /// source signatures of j. Fewer, cleaner candidates; points left without one are not sampled.
+  bool mutual_filter = false;
+  /// Pre-scoring: a hypothesis is first scored on this many source points (a fixed random
+  /// subset) and fully scored only when that partial Huber total is at most
+  /// (1 + prescore_slack) times the best hypothesis's total on the same points. 0 scores every
+  /// surviving hypothesis fully (the exact early exit still applies).
+  std::size_t num_prescore_points = 100;
+  double prescore_slack = 0.1;          ///< see num_prescore_points, >= 0
   std::uint64_t seed = 42;              ///< the only source of randomness
 };
 
@@ -45,7 +54,9 @@ struct SacIaResult {
                                               ///< the iteration limit (the best hypothesis is still returned)
   bool converged = false;       ///< early termination by confidence
   int iterations = 0;           ///< hypotheses drawn
-  int num_scored = 0;           ///< hypotheses that passed pre-rejection and were scored
+  int num_scored = 0;           ///< hypotheses that passed pre-rejection and were (pre-)scored
+  int num_fully_scored = 0;     ///< hypotheses that passed the pre-scoring as well
+  std::size_t num_feature_queries = 0;  ///< source points whose feature neighbours were computed
   std::size_t num_inliers = 0;  ///< source points within huber_threshold of the target under the result
   double overlap = 0.0;         ///< num_inliers / finite source points, [0, 1]
   double rmse = 0.0;            ///< RMS nearest distance of the inliers [m]
@@ -55,14 +66,24 @@ struct SacIaResult {
 /// @brief SAC-IA (SEEDS A1.4): draw samples farther apart than d, give each a random one of its k
 ///        most similar target features, solve the transform in closed form (Horn), score it by the
 ///        Huber penalty of every transformed source point's nearest-target distance, keep the best.
-///        Cheap pre-rejection (edge lengths) and an exact early exit of the score (a partial sum
-///        already above the best) make it fast without changing which hypothesis wins.
+///
+/// What makes it fast, without changing the seed's sampling or scoring:
+/// - feature neighbours come from an exact kd-tree over the target signatures and are computed
+///   only for source points that get sampled (then cached), optionally mutually filtered;
+/// - cheap pre-rejection: edge-length similarity of the sampled polygon, then every sample pair
+///   must lie within huber_threshold under its own hypothesis;
+/// - pre-scoring on a fixed random subset of the source before the full score, and an exact early
+///   exit of the full score once its partial sum exceeds the best;
+/// - early termination (RANSAC-style) once an all-correct sample set has been drawn with the
+///   requested confidence, the inlier ratio being the share of computed (point, candidate) pairs
+///   that the best hypothesis maps within huber_threshold.
 /// @param source, target clouds; `*_features[i]` describes point i (compute_fpfh() on the whole
 ///        cloud). All-zero (invalid) signatures and non-finite points are never sampled or matched.
 /// @param target_tree kd-tree on `target.points`
 /// @throws plumb::Error for mismatched sizes, a tree of another cloud or bad settings
-/// @note Deterministic for a given `settings.seed`; single thread. Cost: one feature kNN per
-///       source point, then O(iterations) cheap checks plus O(n log m) per scored hypothesis.
+/// @note Deterministic for a given `settings.seed`; single thread. Cost: a kd-tree over the target
+///       signatures, one feature kNN per sampled source point, O(iterations) cheap checks, and
+///       O(num_prescore_points log m) per scored / O(n log m) per fully scored hypothesis.
 SacIaResult align_sac_ia(const PointCloud& source, const std::vector<FpfhSignature>& source_features,
                          const PointCloud& target, const std::vector<FpfhSignature>& target_features,
                          const KdTree3f& target_tree, const SacIaSettings& settings = {});

@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <vector>
 
@@ -50,15 +52,35 @@ inline void check_icp_settings(const IcpSettings& s) {
               "align_icp: settings.degeneracy_threshold = " << s.degeneracy_threshold << " must be >= 0");
 }
 
+constexpr std::uint32_t kNoHint = std::numeric_limits<std::uint32_t>::max();
+
+/// What one source point's last kd-tree query taught (reused across iterations and rounds).
+struct IcpNnCache {
+  std::uint32_t nn = kNoHint;  ///< last nearest target point (kNoHint: none known)
+  float clear = 0.0f;          ///< no target point lies within this distance of x_ref [m] (0: unknown)
+  Vector3f x_ref = Vector3f::Zero();  ///< where the point was when `clear` was established
+};
+
 /// Nearest-neighbour pairs of the source under T within distance d (SEEDS A1.6 steps 1-2).
 /// Returns the mean squared residual of the metric.
+/// `cache[i]` carries source point i's previous query and is updated; it only prunes, so the
+/// pairs are the same as with plain nearest-neighbour queries (up to which of several
+/// equidistant points is returned):
+/// - the search is bounded by the distance to the previous neighbour (the true nearest point is
+///   never farther), which the kd-tree uses to prune from the start;
+/// - a point without any target point within `clear` of x_ref has none within clear - |x - x_ref|
+///   of its position x (triangle inequality): while that exceeds d the query is skipped. Points
+///   that fall outside d are searched once out to 2d to learn such a radius. On partial overlap
+///   these far points are the most expensive queries, and they stay far for many iterations.
 inline double icp_pairs(const PointCloud& source, const PointCloud& target, const KdTree3f& tree,
                         const Eigen::Isometry3d& T, double d, const IcpSettings& s,
-                        std::vector<IcpPair>& pairs) {
+                        std::vector<IcpPair>& pairs, std::vector<IcpNnCache>& cache) {
   pairs.clear();
   const Eigen::Matrix3f R = T.linear().cast<float>();
   const Eigen::Vector3f t = T.translation().cast<float>();
+  const float d_f = static_cast<float>(d);
   const float d_sq = static_cast<float>(d * d);
+  const float far_sq = 4.0f * d_sq;
   const bool point_to_plane = s.method == IcpMethod::kPointToPlane;
   const bool check_angle = source.has_normals() && target.has_normals() && s.max_normal_angle < 1.5707963;
   const float min_cos = static_cast<float>(std::cos(s.max_normal_angle));
@@ -67,8 +89,34 @@ inline double icp_pairs(const PointCloud& source, const PointCloud& target, cons
     const Vector3f& p = source.points[i];
     if (!p.allFinite()) continue;
     const Vector3f x = R * p + t;
-    const auto nn = tree.nearest(x, d_sq);
-    if (!nn || !(nn->dist_sq <= d_sq)) continue;
+    IcpNnCache& c = cache[i];
+    if (c.clear > 0.0f) {
+      // Margins cover float rounding of the distances.
+      if (c.clear - (x - c.x_ref).norm() > d_f * 1.0001f + 1e-6f) continue;
+      c.clear = 0.0f;
+    }
+    float bound = far_sq;
+    if (c.nn != kNoHint) {
+      // Inflated a little so that rounding never excludes the old neighbour itself.
+      const float h = (target.points[c.nn] - x).squaredNorm();
+      bound = std::min(d_sq, h * 1.0001f + 1e-12f);
+    }
+    const auto nn = tree.nearest(x, bound);
+    if (!nn) {  // nothing within sqrt(bound) >= d
+      c.nn = kNoHint;
+      if (bound == far_sq) {
+        c.clear = 2.0f * d_f;
+        c.x_ref = x;
+      }
+      continue;
+    }
+    if (!(nn->dist_sq <= d_sq)) {  // the nearest point is beyond d: remember how far
+      c.nn = kNoHint;
+      c.clear = std::sqrt(nn->dist_sq);
+      c.x_ref = x;
+      continue;
+    }
+    c.nn = static_cast<std::uint32_t>(nn->index);
     const std::size_t j = nn->index;
     if (check_angle) {
       const Vector3f& nt = target.normals[j];
@@ -192,6 +240,7 @@ inline IcpResult align_icp(const PointCloud& source, const PointCloud& target, c
   double d = settings.max_correspondence_distance;
   std::vector<detail::IcpPair> pairs;
   pairs.reserve(source.size());
+  std::vector<detail::IcpNnCache> cache(source.size());
   bool failed = false;
   bool gate_passed = false;
   for (int round = 0; round < settings.max_rounds && !failed; ++round) {
@@ -200,7 +249,7 @@ inline IcpResult align_icp(const PointCloud& source, const PointCloud& target, c
     out.converged = false;
     double prev_mse = std::numeric_limits<double>::infinity();
     for (int it = 0; it < settings.max_iterations; ++it) {
-      const double mse = detail::icp_pairs(source, target, target_tree, T, d, settings, pairs);
+      const double mse = detail::icp_pairs(source, target, target_tree, T, d, settings, pairs, cache);
       if (pairs.size() < settings.min_correspondences) {
         out.status = Status::kInsufficientData;
         failed = true;
@@ -240,7 +289,7 @@ inline IcpResult align_icp(const PointCloud& source, const PointCloud& target, c
     d = next;
   }
   out.T_target_source = T;
-  detail::icp_pairs(source, target, target_tree, T, d, settings, pairs);
+  detail::icp_pairs(source, target, target_tree, T, d, settings, pairs, cache);
   out.num_inliers = pairs.size();
   if (!pairs.empty()) {
     double sum_sq = 0.0;

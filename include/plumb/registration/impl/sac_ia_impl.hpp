@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include "plumb/core/error.hpp"
@@ -41,7 +42,69 @@ inline void check_sac_ia_settings(const SacIaSettings& s) {
               "align_sac_ia: settings.edge_similarity = " << s.edge_similarity << " must be in [0, 1)");
   PLUMB_CHECK(s.confidence > 0.0 && s.confidence <= 1.0,
               "align_sac_ia: settings.confidence = " << s.confidence << " must be in (0, 1]");
+  PLUMB_CHECK(std::isfinite(s.prescore_slack) && s.prescore_slack >= 0.0,
+              "align_sac_ia: settings.prescore_slack = " << s.prescore_slack << " must be >= 0");
 }
+
+/// Feature-space candidates of SAC-IA (SEEDS A1.4b), computed on first use and cached.
+class SacIaCandidates {
+ public:
+  SacIaCandidates(const std::vector<FpfhSignature>& source_features, const std::vector<std::size_t>& src_ids,
+                  const std::vector<FpfhSignature>& target_features, const std::vector<std::size_t>& tgt_ids,
+                  std::size_t k, bool mutual)
+      : sf_(source_features), tf_(target_features), src_ids_(src_ids), k_(k), mutual_(mutual),
+        target_tree_(target_features, tgt_ids), cand_(src_ids.size() * k), count_(src_ids.size(), kUnknown),
+        dist_(k) {
+    if (mutual_) {
+      source_tree_ = std::make_unique<FeatureKdTree<kFpfhBins>>(source_features, src_ids);
+      back_.resize(target_features.size() * k);
+      back_count_.assign(target_features.size(), kUnknown);
+    }
+  }
+  std::size_t k() const { return k_; }
+  bool known(std::size_t a) const { return count_[a] != kUnknown; }
+  /// Candidates (target indices) of usable source point a (position in src_ids).
+  std::size_t get(std::size_t a, const std::uint32_t*& out) {
+    if (count_[a] == kUnknown) compute(a);
+    out = &cand_[a * k_];
+    return count_[a];
+  }
+  std::size_t num_known() const { return known_.size(); }
+  const std::vector<std::size_t>& known_points() const { return known_; }
+
+ private:
+  static constexpr std::uint32_t kUnknown = std::numeric_limits<std::uint32_t>::max();
+  void compute(std::size_t a) {
+    std::uint32_t* c = &cand_[a * k_];
+    std::size_t n = target_tree_.knn(sf_[src_ids_[a]].data(), k_, c, dist_.data());
+    if (mutual_) {
+      const std::uint32_t i = static_cast<std::uint32_t>(src_ids_[a]);
+      std::size_t kept = 0;
+      for (std::size_t m = 0; m < n; ++m) {
+        const std::uint32_t j = c[m];
+        if (back_count_[j] == kUnknown)
+          back_count_[j] = static_cast<std::uint32_t>(source_tree_->knn(tf_[j].data(), k_, &back_[j * k_], dist_.data()));
+        const std::uint32_t* b = &back_[j * k_];
+        if (std::find(b, b + back_count_[j], i) != b + back_count_[j]) c[kept++] = j;
+      }
+      n = kept;
+    }
+    count_[a] = static_cast<std::uint32_t>(n);
+    known_.push_back(a);
+  }
+
+  const std::vector<FpfhSignature>& sf_;
+  const std::vector<FpfhSignature>& tf_;
+  const std::vector<std::size_t>& src_ids_;
+  std::size_t k_;
+  bool mutual_;
+  FeatureKdTree<kFpfhBins> target_tree_;
+  std::unique_ptr<FeatureKdTree<kFpfhBins>> source_tree_;
+  std::vector<std::uint32_t> cand_, count_;
+  std::vector<std::uint32_t> back_, back_count_;
+  std::vector<float> dist_;
+  std::vector<std::size_t> known_;
+};
 
 }  // namespace detail
 
@@ -70,49 +133,79 @@ inline SacIaResult align_sac_ia(const PointCloud& source, const std::vector<Fpfh
     if (target.points[j].allFinite() && detail::fpfh_valid(target_features[j])) tgt_ids.push_back(j);
   if (src_ids.size() < s || tgt_ids.size() < 3) return out;
 
-  // SEEDS A1.4b: the k most similar target signatures of every usable source point.
+  // SEEDS A1.4b: the k most similar target signatures, computed for a source point when it is
+  // first sampled.
   const std::size_t k = std::min(settings.k_correspondences, tgt_ids.size());
-  const std::vector<std::uint32_t> candidates = feature_knn(source_features, src_ids, target_features, tgt_ids, k);
+  detail::SacIaCandidates candidates(source_features, src_ids, target_features, tgt_ids, k, settings.mutual_filter);
 
   Rng rng(settings.seed);
-  // Score points in a fixed random order so that the early exit of a bad hypothesis comes soon.
+  // Score points in a fixed random order: its first points are the pre-scoring subset, and the
+  // early exit of a bad hypothesis comes soon.
   for (std::size_t i = score_order.size(); i > 1; --i)
     std::swap(score_order[i - 1], score_order[rng.uniform_index(i)]);
+  const std::size_t num_pre = std::min(settings.num_prescore_points, score_order.size());
 
   const double m1 = settings.huber_threshold;
+  const double m1_sq = m1 * m1;
   const double max_d = settings.max_correspondence_distance;
   const float max_d_sq = static_cast<float>(max_d * max_d);
   const double far_cost = huber_penalty(max_d, m1);
   const double min_sep_sq = settings.min_sample_distance * settings.min_sample_distance;
   const double edge_ratio = settings.edge_similarity;
+  const double pre_factor = 1.0 + settings.prescore_slack;
 
   double best = std::numeric_limits<double>::infinity();
+  double best_pre = std::numeric_limits<double>::infinity();
   Eigen::Isometry3d best_T = Eigen::Isometry3d::Identity();
   double needed = static_cast<double>(settings.max_iterations);
   std::vector<std::size_t> sample(s);   // positions in src_ids
   std::vector<Vector3d> P(s), Q(s);
+  std::vector<const std::uint32_t*> cp(s);  // candidates of each sample
+  std::vector<std::size_t> np(s);           // and their number
   constexpr int kMaxSampleAttempts = 100;
 
-  auto score = [&](const Eigen::Isometry3d& T, double bound) {
-    const Eigen::Matrix3f R = T.linear().cast<float>();
-    const Eigen::Vector3f t = T.translation().cast<float>();
-    double total = 0.0;
-    for (std::size_t i : score_order) {
-      const auto nn = target_tree.nearest(R * source.points[i] + t, max_d_sq);
-      // SEEDS eq. 2 on the nearest-neighbour distance, truncated at max_correspondence_distance.
+  // Huber total (SEEDS eq. 2, distances truncated at max_correspondence_distance) over
+  // score_order[begin, end), added to `total`; stops early once total >= bound (exact: every
+  // penalty is >= 0).
+  auto score_range = [&](const Eigen::Matrix3f& R, const Eigen::Vector3f& t, std::size_t begin, std::size_t end,
+                         double total, double bound) {
+    for (std::size_t n = begin; n < end && total < bound; ++n) {
+      const auto nn = target_tree.nearest(R * source.points[score_order[n]] + t, max_d_sq);
       total += nn ? huber_penalty(std::sqrt(static_cast<double>(nn->dist_sq)), m1) : far_cost;
-      if (total >= bound) return total;  // exact: penalties are >= 0
     }
     return total;
+  };
+  // Early termination (RANSAC-style): w = share of the computed (point, candidate) pairs that the
+  // best hypothesis maps within m1, the chance that one drawn pair is right; an all-correct set
+  // of s pairs then comes with probability about w^s per hypothesis.
+  auto update_needed = [&] {
+    std::size_t num_good = 0, num_pairs = 0;
+    for (std::size_t a : candidates.known_points()) {
+      const std::uint32_t* c = nullptr;
+      const std::size_t n = candidates.get(a, c);
+      const Vector3d x = best_T * source.points[src_ids[a]].cast<double>();
+      num_pairs += n;
+      for (std::size_t m = 0; m < n; ++m)
+        num_good += (x - target.points[c[m]].cast<double>()).squaredNorm() < m1_sq ? 1 : 0;
+    }
+    if (settings.confidence >= 1.0 || num_pairs == 0) return;
+    const double w = static_cast<double>(num_good) / static_cast<double>(num_pairs);
+    const double ws = std::pow(w, static_cast<double>(s));
+    needed = ws >= 1.0 ? 1.0 : ws > 0.0 ? std::log(1.0 - settings.confidence) / std::log1p(-ws)
+                                        : static_cast<double>(settings.max_iterations);
   };
 
   int it = 0;
   for (; it < settings.max_iterations; ++it) {
-    if (static_cast<double>(it) >= needed) {
-      out.converged = true;
-      break;
+    if (static_cast<double>(it) >= needed && std::isfinite(best)) {
+      // Re-estimate with every pair computed so far (more points than when `needed` was set).
+      update_needed();
+      if (static_cast<double>(it) >= needed) {
+        out.converged = true;
+        break;
+      }
     }
-    // SEEDS A1.4a: samples pairwise farther apart than d.
+    // SEEDS A1.4a: samples pairwise farther apart than d (and with at least one candidate).
     bool ok = true;
     for (std::size_t a = 0; a < s && ok; ++a) {
       ok = false;
@@ -123,13 +216,17 @@ inline SacIaResult align_sac_ia(const PointCloud& source, const std::vector<Fpfh
         for (std::size_t b = 0; b < a && ok; ++b) {
           ok = sample[b] != c && (source.points[src_ids[sample[b]]] - pc).squaredNorm() >= min_sep_sq;
         }
+        if (ok) {
+          np[a] = candidates.get(c, cp[a]);
+          ok = np[a] > 0;
+        }
         if (ok) sample[a] = c;
       }
     }
     if (!ok) continue;
     // SEEDS A1.4b: one of the k most similar signatures at random.
     for (std::size_t a = 0; a < s; ++a) {
-      const std::uint32_t j = candidates[sample[a] * k + rng.uniform_index(k)];
+      const std::uint32_t j = cp[a][rng.uniform_index(np[a])];
       P[a] = source.points[src_ids[sample[a]]].cast<double>();
       Q[a] = target.points[j].cast<double>();
     }
@@ -150,28 +247,25 @@ inline SacIaResult align_sac_ia(const PointCloud& source, const std::vector<Fpfh
     const HornResult h = acc.solve();
     if (!h.valid) continue;
     bool close = true;
-    for (std::size_t a = 0; a < s && close; ++a) close = (h.T_target_source * P[a] - Q[a]).norm() <= m1;
+    for (std::size_t a = 0; a < s && close; ++a) close = (h.T_target_source * P[a] - Q[a]).squaredNorm() <= m1_sq;
     if (!close) continue;
     ++out.num_scored;
-    const double total = score(h.T_target_source, best);
+    const Eigen::Matrix3f R = h.T_target_source.linear().cast<float>();
+    const Eigen::Vector3f t = h.T_target_source.translation().cast<float>();
+    const double pre_bound = std::min(best, std::isfinite(best_pre) ? pre_factor * best_pre : best);
+    const double pre = score_range(R, t, 0, num_pre, 0.0, pre_bound);
+    if (!(pre <= pre_factor * best_pre) && std::isfinite(best_pre)) continue;  // not promising
+    if (!(pre < best)) continue;
+    ++out.num_fully_scored;
+    const double total = score_range(R, t, num_pre, score_order.size(), pre, best);
     if (!(total < best)) continue;
     best = total;
+    best_pre = pre;
     best_T = h.T_target_source;
-    // Early termination: w = chance that a drawn (point, candidate) pair is right under the best
-    // hypothesis; an all-correct set of s pairs comes with probability about w^s.
-    std::size_t num_good = 0;
-    for (std::size_t a = 0; a < src_ids.size(); ++a) {
-      const Vector3d x = best_T * source.points[src_ids[a]].cast<double>();
-      for (std::size_t m = 0; m < k; ++m)
-        num_good += (x - target.points[candidates[a * k + m]].cast<double>()).squaredNorm() < m1 * m1 ? 1 : 0;
-    }
-    const double w = static_cast<double>(num_good) / static_cast<double>(src_ids.size() * k);
-    const double ws = std::pow(w, static_cast<double>(s));
-    if (settings.confidence < 1.0 && ws > 0.0) {
-      needed = ws >= 1.0 ? 1.0 : std::log(1.0 - settings.confidence) / std::log1p(-ws);
-    }
+    update_needed();
   }
   out.iterations = it;
+  out.num_feature_queries = candidates.num_known();
   if (!std::isfinite(best)) return out;  // no hypothesis survived: kInsufficientData
   out.T_target_source = best_T;
   out.score = best;
@@ -179,11 +273,11 @@ inline SacIaResult align_sac_ia(const PointCloud& source, const std::vector<Fpfh
   // Inliers of the winner.
   const Eigen::Matrix3f R = best_T.linear().cast<float>();
   const Eigen::Vector3f t = best_T.translation().cast<float>();
-  const float m1_sq = static_cast<float>(m1 * m1);
+  const float m1_sq_f = static_cast<float>(m1_sq);
   double sum_sq = 0.0;
   for (std::size_t i : score_order) {
-    const auto nn = target_tree.nearest(R * source.points[i] + t, m1_sq);
-    if (nn && nn->dist_sq < m1_sq) {
+    const auto nn = target_tree.nearest(R * source.points[i] + t, m1_sq_f);
+    if (nn && nn->dist_sq < m1_sq_f) {
       ++out.num_inliers;
       sum_sq += nn->dist_sq;
     }
