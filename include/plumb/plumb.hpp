@@ -65,6 +65,7 @@
 #include "plumb/calibration/tuple_extraction.hpp"
 
 #include "plumb/loam/features.hpp"
+#include "plumb/loam/local_map.hpp"
 #include "plumb/loam/odometry.hpp"
 #include "plumb/loam/range_image.hpp"
 #include "plumb/loam/residuals.hpp"
@@ -94,5 +95,6 @@
 #include "plumb/sim/world.hpp"
 
 #include "plumb/pipeline/bim_odometry.hpp"
+#include "plumb/pipeline/hybrid_lio.hpp"
 #include "plumb/pipeline/pose_composer.hpp"
 #include "plumb/pipeline/run.hpp"
