@@ -1,12 +1,15 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The fast paths of segment_frame() against their references: the frame sample against
-// voxel_grid() + estimate_normals() on a kd-tree, the normal-direction bins of the point + normal
+// voxel_grid() + estimate_normals() on a kd-tree, the voxel-block normals against a brute-force
+// reading of their definition, the normal-direction bins of the point + normal
 // RANSAC against the plain inlier count, and the stages' handling of empty and bad input.
 #include "plumb/segmentation/frame_sample.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -28,7 +31,8 @@ constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
 bool same_bits(const Vector3f& a, const Vector3f& b) { return std::memcmp(a.data(), b.data(), sizeof(Vector3f)) == 0; }
 
 /// sample_frame() must be voxel_grid() (nearest to centroid) plus kd-tree normals, bit for bit.
-void expect_sample_matches_reference(const PointCloud& cloud, const FrameSampleSettings& s) {
+void expect_sample_matches_reference(const PointCloud& cloud, FrameSampleSettings s) {
+  s.normals = FrameNormals::kNearest;
   const FrameSample sample = sample_frame(cloud, s);
   PointCloud xyz;
   xyz.points = cloud.points;
@@ -95,6 +99,91 @@ TEST(FrameSampleTest, RealFramesMatchVoxelGrid) {
   expect_sample_matches_reference(io::read_cloud(hdl32), s);  // x y z intensity, no-return zeros
   s.voxel_size = 0.1;
   expect_sample_matches_reference(io::read_cloud(room), s);
+}
+
+/// kVoxelBlock normals against a brute-force reading of their definition: the k nearest (by float
+/// squared distance) of the sample points whose voxel differs by at most one in x, y and z and that
+/// lie within the radius; with fewer than normal_min_block of them, the k nearest within the radius
+/// among all sample points. Voxels from floor((p - min) / leaf) with the finite points' minimum.
+void expect_block_normals_match_brute_force(const PointCloud& cloud, const FrameSampleSettings& s) {
+  const FrameSample sample = sample_frame(cloud, s);
+  ASSERT_EQ(sample.status, Status::kOk);
+  Vector3d lo = Vector3d::Constant(std::numeric_limits<double>::infinity());
+  for (const Vector3f& p : cloud.points) {
+    if (p.allFinite()) lo = lo.cwiseMin(p.cast<double>());
+  }
+  const std::size_t m = sample.points.size();
+  std::vector<Eigen::Vector3i> cell(m);
+  for (std::size_t j = 0; j < m; ++j) {
+    for (int a = 0; a < 3; ++a) {
+      cell[j][a] = static_cast<int>(std::floor((static_cast<double>(sample.points[j][a]) - lo[a]) / s.voxel_size));
+    }
+  }
+  const float r_sq = s.normal_radius * s.normal_radius;
+  auto d_sq = [&](std::size_t a, std::size_t b) {
+    const float dx = sample.points[a].x() - sample.points[b].x(), dy = sample.points[a].y() - sample.points[b].y(),
+                dz = sample.points[a].z() - sample.points[b].z();
+    return dx * dx + dy * dy + dz * dz;
+  };
+  std::size_t num_valid = 0, num_sparse = 0;
+  for (std::size_t j = 0; j < m; ++j) {
+    if (!(sample.points[j].z() <= s.normal_max_z)) {
+      EXPECT_TRUE(std::isnan(sample.normals[j].x())) << j;
+      continue;
+    }
+    std::vector<std::pair<float, std::size_t>> block, all;
+    for (std::size_t i = 0; i < m; ++i) {
+      const float d = d_sq(i, j);
+      if (!(d <= r_sq)) continue;
+      all.emplace_back(d, i);
+      if ((cell[i] - cell[j]).cwiseAbs().maxCoeff() <= 1) block.emplace_back(d, i);
+    }
+    std::vector<std::pair<float, std::size_t>>& use = block.size() >= s.normal_min_block ? block : all;
+    num_sparse += block.size() >= s.normal_min_block ? 0 : 1;
+    std::sort(use.begin(), use.end());
+    if (use.size() > s.normal_k) use.resize(s.normal_k);
+    std::vector<std::size_t> idx;
+    for (const auto& u : use) idx.push_back(u.second);
+    Vector3f ref;
+    float curv = 0.0f;
+    const bool ok = detail::pca_normal(sample.points, idx.data(), idx.size(), ref, curv);
+    ASSERT_EQ(ok, !std::isnan(sample.normals[j].x())) << j;
+    if (!ok) continue;
+    if (ref.dot(s.viewpoint - sample.points[j]) < 0.0f) ref = -ref;
+    EXPECT_GT(ref.dot(sample.normals[j]), 0.99999f) << j;
+    ++num_valid;
+  }
+  EXPECT_GT(num_valid, m / 2);
+  EXPECT_GT(num_sparse, 0u);  // both branches are exercised
+  EXPECT_LT(num_sparse, m / 2);
+}
+
+TEST(FrameSampleTest, VoxelBlockNormalsMatchTheirDefinition) {
+  Rng rng(5);
+  PointCloud cloud;  // a floor, a tilted wall, a sparse far patch and clutter
+  for (int i = 0; i < 12000; ++i) {
+    const int kind = i % 4;
+    if (kind == 0) cloud.points.emplace_back(rng.uniform(-4, 4), rng.uniform(-4, 4), -1.5f + rng.normal(0, 0.01));
+    if (kind == 1) {
+      const float t = rng.uniform(-3, 3), h = rng.uniform(-1.5, 1.5);
+      cloud.points.emplace_back(2.5f + 0.3f * t + rng.normal(0, 0.01), t, h);
+    }
+    if (kind == 2) cloud.points.emplace_back(rng.uniform(-12, -8), rng.uniform(-6, 6), rng.uniform(-1.5, -1.2));
+    if (kind == 3) cloud.points.emplace_back(rng.uniform(-4, 4), rng.uniform(-4, 4), rng.uniform(-1.5, 2));
+  }
+  cloud.points[9] = Vector3f(kNan, 1, 1);
+  FrameSampleSettings s;
+  expect_block_normals_match_brute_force(cloud, s);
+  s.normal_k = 5;
+  s.normal_min_block = 8;
+  s.normal_max_z = 0.0f;
+  s.voxel_size = 0.25;
+  expect_block_normals_match_brute_force(cloud, s);
+}
+
+TEST(FrameSampleTest, VoxelBlockNormalsOnARealFrame) {
+  PLUMB_REQUIRE_DATA(hdl32, "cloud3d/hdl32_pair/251371071.pcd");
+  expect_block_normals_match_brute_force(io::read_cloud(hdl32), FrameSampleSettings{});
 }
 
 TEST(FrameSampleTest, EmptyNanAndBadSettings) {

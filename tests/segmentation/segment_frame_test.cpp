@@ -101,8 +101,10 @@ Recall recall_of(const Room& room, const SegmentResult& r) {
 
 TEST(SegmentFrameTest, SyntheticRoomGroundAndWallRecall) {
   const Room room = make_room(11);
+  for (const FrameNormals normals : {FrameNormals::kVoxelBlock, FrameNormals::kNearest})
   for (const double height : {std::numeric_limits<double>::quiet_NaN(), 1.2}) {
     SegmentSettings s;
+    s.sample.normals = normals;
     s.ground.sensor_height = height;
     const SegmentResult r = segment_frame(room.cloud, s);
     ASSERT_EQ(r.status, Status::kOk) << "height " << height;
@@ -110,7 +112,8 @@ TEST(SegmentFrameTest, SyntheticRoomGroundAndWallRecall) {
     EXPECT_LT(angle_to_z(r.ground.plane.normal), 0.5 * kDeg);
     EXPECT_NEAR(r.ground.plane.offset, -1.2, 0.01);  // normal up, D = -height
     const Recall rec = recall_of(room, r);
-    std::cout << "[ synthetic room, sensor_height " << height << " ] ground recall " << rec.ground
+    std::cout << "[ synthetic room, " << (normals == FrameNormals::kNearest ? "kNearest" : "kVoxelBlock")
+              << " normals, sensor_height " << height << " ] ground recall " << rec.ground
               << ", wall recall " << rec.wall << ", non-floor labelled ground " << rec.ground_false << ", "
               << r.vertical.planes.size() << " vertical planes\n";
     EXPECT_GE(rec.ground, 0.98);

@@ -21,6 +21,19 @@
 
 namespace plumb {
 
+/// @brief Which neighbours give a sample point its normal (sample_frame()).
+enum class FrameNormals {
+  /// The `normal_k` nearest among the sample points of the 3 x 3 x 3 voxels around the point's own
+  /// that lie within `normal_radius`; where fewer than `normal_min_block` lie there (sparse places),
+  /// the k nearest within the radius as kNearest. A walk along voxel rows instead of a tree search
+  /// for most points. Where the k nearest lie inside the block (dense surfaces) the neighbours are
+  /// those of kNearest; elsewhere they are nearby points of the same scale.
+  kVoxelBlock,
+  /// The `normal_k` nearest sample points within `normal_radius`: estimate_normals() on a kd-tree
+  /// of the sample (features/normals.hpp).
+  kNearest,
+};
+
 /// @brief How a frame is reduced before normals are estimated.
 struct FrameSampleSettings {
   /// Voxel edge of the sample [m], > 0. Each voxel keeps its real point nearest to the centroid
@@ -28,7 +41,13 @@ struct FrameSampleSettings {
   /// floors of a room dense enough for 8-neighbour normals while a 32-line frame shrinks ~14x
   /// (the normals of the sample are most of segment_frame()'s cost).
   double voxel_size = 0.3;
-  std::size_t normal_k = 8;  ///< neighbours per normal (the point included), >= 3
+  FrameNormals normals = FrameNormals::kVoxelBlock;  ///< neighbourhood of a normal, see FrameNormals
+  /// Neighbours per normal at most (the point included), >= 3.
+  std::size_t normal_k = 8;
+  /// kVoxelBlock: a block with fewer sample points than this within the radius uses the k nearest
+  /// from a kd-tree instead (5: a 32-beam frame's far surfaces, where rings are farther apart than
+  /// a voxel, keep their kNearest normals).
+  std::size_t normal_min_block = 5;
   /// Neighbours farther than this are not used for a normal [m]; 0 = plain k nearest. Points with
   /// fewer than 3 neighbours inside get no normal (NaN) and are never plane candidates.
   float normal_radius = 1.0f;
@@ -54,12 +73,14 @@ struct FrameSample {
 ///
 /// The sample is exactly voxel_grid(cloud, {voxel_size, kNearestToCentroid}) (grid anchored at the
 /// finite points' bounding-box minimum, ascending voxel-key order, ties to the lowest index), taken
-/// from the coordinates alone: no copy of the cloud or of its other fields.
+/// from the coordinates alone: no copy of the cloud or of its other fields. Normals from the
+/// neighbourhood chosen by `settings.normals` (FrameNormals).
 /// @param cloud a frame in the sensor frame (origin = sensor, z up); non-finite points skipped
 /// @return the sample; kInsufficientData (and an empty sample) when fewer than 3 points are finite
 /// @throws plumb::Error on invalid settings or a cloud whose optional fields are inconsistent
-/// @note O(n) for the n input points (radix sort of the voxel keys), then O(m k log m) for the
-///       normals of the m sample points, which dominate. One thread, deterministic.
+/// @note O(n) for the n input points (radix sort of the voxel keys), then the normals of the m
+///       sample points: O(m k) walking voxel rows (kVoxelBlock, plus O(k log m) per sparse point),
+///       O(m k log m) with the kd-tree (kNearest). One thread, deterministic.
 FrameSample sample_frame(const PointCloud& cloud, const FrameSampleSettings& settings = {});
 
 }  // namespace plumb

@@ -19,7 +19,8 @@ namespace detail {
 /// arithmetic (double sum, times 1 / count, first of equal distances), so the sample is the same.
 template <typename T, typename KeyOf, typename IndexOf>
 void nearest_to_centroid_runs(const std::vector<Vector3f>& pts, const T* sorted, std::size_t n, KeyOf key_of,
-                              IndexOf index_of, std::vector<std::size_t>& kept) {
+                              IndexOf index_of, std::vector<std::size_t>& kept,
+                              std::vector<std::uint64_t>& kept_keys) {
   std::size_t b = 0;
   while (b < n) {
     const std::uint64_t key = key_of(sorted[b]);
@@ -43,14 +44,24 @@ void nearest_to_centroid_runs(const std::vector<Vector3f>& pts, const T* sorted,
       }
     }
     kept.push_back(best);
+    kept_keys.push_back(key);
     b = e;
   }
 }
 
-/// The input indices voxel_grid(cloud, {leaf, kNearestToCentroid}).indices would give, from the
-/// coordinates alone: the same layout (filters/voxel_grid.hpp), keys and stable radix sort, without
-/// copying the points or any field. Empty when no point is finite.
-inline std::vector<std::size_t> voxel_sample(const std::vector<Vector3f>& pts, double leaf) {
+/// The voxel sample of a frame with the voxel key of every kept point (ascending).
+struct KeyedVoxelSample {
+  std::vector<std::size_t> source;  ///< input index of the point kept in each voxel
+  std::vector<std::uint64_t> keys;  ///< its voxel key (filters/voxel_grid.hpp layout), ascending
+  VoxelKeyLayout layout;            ///< the grid (meaningful when `source` is not empty)
+};
+
+/// The input indices voxel_grid(cloud, {leaf, kNearestToCentroid}).indices would give, and their
+/// voxel keys, from the coordinates alone: the same layout (filters/voxel_grid.hpp), keys and
+/// stable radix sort, without copying the points or any field. Empty when no point is finite.
+/// (A sort-free variant, hashing voxels in input order, was measured slower on a 32-beam frame:
+/// its per-point updates of voxel sums jump across memory, the radix passes stream.)
+inline KeyedVoxelSample voxel_sample_keyed(const std::vector<Vector3f>& pts, double leaf) {
   const std::size_t n = pts.size();
   float lo_x = std::numeric_limits<float>::infinity(), lo_y = lo_x, lo_z = lo_x;
   float hi_x = -lo_x, hi_y = hi_x, hi_z = hi_x;
@@ -66,17 +77,20 @@ inline std::vector<std::size_t> voxel_sample(const std::vector<Vector3f>& pts, d
     hi_z = std::max(hi_z, z);
     ++num_finite;
   }
-  std::vector<std::size_t> kept;
-  if (num_finite == 0) return kept;
+  KeyedVoxelSample out;
+  std::vector<std::size_t>& kept = out.source;
+  if (num_finite == 0) return out;
   PLUMB_CHECK(n <= std::numeric_limits<std::uint32_t>::max(),
               "sample_frame: clouds of more than 2^32 - 1 points are not supported, got " << n);
-  const VoxelKeyLayout layout = make_voxel_key_layout(Vector3f(lo_x, lo_y, lo_z).cast<double>(),
+  out.layout = make_voxel_key_layout(Vector3f(lo_x, lo_y, lo_z).cast<double>(),
                                                       Vector3f(hi_x, hi_y, hi_z).cast<double>(), leaf);
+  const VoxelKeyLayout& layout = out.layout;
   const VoxelKeyer keyer(layout);
   RadixPlan plan(layout.key_bits);
   const bool all_finite = num_finite == n;
   const int index_bits = bit_width_u64(static_cast<std::uint64_t>(n - 1));
   kept.reserve(num_finite / 4);
+  out.keys.reserve(num_finite / 4);
   if (layout.key_bits + index_bits <= 64) {
     // Key in the high bits, input index in the low bits of one word.
     std::unique_ptr<std::uint64_t[]> items(new std::uint64_t[num_finite]);
@@ -92,7 +106,7 @@ inline std::vector<std::size_t> voxel_sample(const std::vector<Vector3f>& pts, d
     const std::uint64_t index_mask = index_bits == 0 ? 0 : (~std::uint64_t{0} >> (64 - index_bits));
     auto index_of = [index_mask](std::uint64_t x) { return static_cast<std::size_t>(x & index_mask); };
     const std::uint64_t* sorted = radix_sort_by_key(items.get(), tmp.get(), num_finite, plan, key_of);
-    nearest_to_centroid_runs(pts, sorted, num_finite, key_of, index_of, kept);
+    nearest_to_centroid_runs(pts, sorted, num_finite, key_of, index_of, kept, out.keys);
   } else {
     std::unique_ptr<VoxelKeyIndex[]> items(new VoxelKeyIndex[num_finite]);
     std::unique_ptr<VoxelKeyIndex[]> tmp(new VoxelKeyIndex[num_finite]);
@@ -106,9 +120,150 @@ inline std::vector<std::size_t> voxel_sample(const std::vector<Vector3f>& pts, d
     auto key_of = [](const VoxelKeyIndex& x) { return x.key; };
     auto index_of = [](const VoxelKeyIndex& x) { return static_cast<std::size_t>(x.index); };
     const VoxelKeyIndex* sorted = radix_sort_by_key(items.get(), tmp.get(), num_finite, plan, key_of);
-    nearest_to_centroid_runs(pts, sorted, num_finite, key_of, index_of, kept);
+    nearest_to_centroid_runs(pts, sorted, num_finite, key_of, index_of, kept, out.keys);
   }
-  return kept;
+  return out;
+}
+
+/// The kept input indices of voxel_sample_keyed().
+inline std::vector<std::size_t> voxel_sample(const std::vector<Vector3f>& pts, double leaf) {
+  return voxel_sample_keyed(pts, leaf).source;
+}
+
+/// Normals of the sample by a kd-tree over it: estimate_normals() with the settings' k and radius
+/// (FrameNormals::kNearest), for the points at or below normal_max_z.
+inline void sample_normals_kdtree(const std::vector<Vector3f>& pts, const FrameSampleSettings& settings,
+                                  std::vector<Vector3f>& normals) {
+  const KdTree<3> tree(pts);
+  NormalSettings ns;
+  ns.k = settings.normal_k;
+  ns.radius = settings.normal_radius;
+  ns.viewpoint = settings.viewpoint;
+  ns.orient_to_viewpoint = true;
+  if (std::isinf(settings.normal_max_z) && settings.normal_max_z > 0.0f) {
+    normals = estimate_normals(pts, tree, pts, ns).normals;
+    return;
+  }
+  std::vector<Vector3f> queries;
+  std::vector<std::size_t> where;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    if (pts[i].z() <= settings.normal_max_z) {
+      queries.push_back(pts[i]);
+      where.push_back(i);
+    }
+  }
+  normals.assign(pts.size(), Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
+  const NormalResult nr = estimate_normals(queries, tree, pts, ns);
+  for (std::size_t j = 0; j < where.size(); ++j) normals[where[j]] = nr.normals[j];
+}
+
+/// Normals of a voxel sample (one point per voxel, ascending keys) by FrameNormals::kVoxelBlock:
+/// the neighbours of a point are the k nearest of the sample points of the 3 x 3 x 3 voxels around
+/// its own that lie within the radius; when fewer than normal_min_block lie there, the k nearest
+/// within the radius (kd-tree built on first need), as kNearest.
+///
+/// The keys are x + n_x (y + n_y z) in voxel coordinates, so a row of voxels along x is a contiguous
+/// run of the sample and the rows come in (z, y) order. The points of one row share the 3 x 3 rows
+/// around it and their x only grows, so each of those rows is walked once by a cursor.
+inline void sample_normals_voxel_block(const std::vector<Vector3f>& pts, const std::vector<std::uint64_t>& keys,
+                                       const VoxelKeyLayout& layout, const FrameSampleSettings& settings,
+                                       std::vector<Vector3f>& normals) {
+  const std::size_t m = pts.size();
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  normals.assign(m, Vector3f::Constant(nan));
+  if (m == 0) return;
+  const std::uint64_t nx = layout.n[0], ny = layout.n[1], nz = layout.n[2];
+  // x coordinate and (y, z) row of each sample point; the rows as runs of the sample.
+  std::vector<std::int64_t> ix(m);
+  std::vector<std::uint64_t> row_id;  // ascending
+  std::vector<std::uint32_t> row_begin;
+  for (std::size_t j = 0; j < m; ++j) {
+    const std::uint64_t r = keys[j] / nx;
+    ix[j] = static_cast<std::int64_t>(keys[j] - r * nx);
+    if (row_id.empty() || row_id.back() != r) {
+      row_id.push_back(r);
+      row_begin.push_back(static_cast<std::uint32_t>(j));
+    }
+  }
+  row_begin.push_back(static_cast<std::uint32_t>(m));
+  const std::size_t num_rows = row_id.size();
+  // Row of voxel row (y, z): a dense table when the (y, z) extent is small, else binary search.
+  constexpr std::uint32_t kNoRow = std::numeric_limits<std::uint32_t>::max();
+  const bool dense = ny <= (std::uint64_t{1} << 24) / nz && ny * nz <= std::max<std::uint64_t>(1u << 16, 16 * m);
+  std::vector<std::uint32_t> row_table;
+  if (dense) {
+    row_table.assign(static_cast<std::size_t>(ny * nz), kNoRow);
+    for (std::size_t r = 0; r < num_rows; ++r) row_table[static_cast<std::size_t>(row_id[r])] = static_cast<std::uint32_t>(r);
+  }
+  auto find_row = [&](std::uint64_t id) -> std::uint32_t {
+    if (dense) return row_table[static_cast<std::size_t>(id)];
+    const auto it = std::lower_bound(row_id.begin(), row_id.end(), id);
+    return it != row_id.end() && *it == id ? static_cast<std::uint32_t>(it - row_id.begin()) : kNoRow;
+  };
+
+  const std::size_t k = settings.normal_k;
+  const float r_sq = settings.normal_radius > 0.0f ? settings.normal_radius * settings.normal_radius
+                                                   : std::numeric_limits<float>::infinity();
+  std::vector<std::size_t> idx(k);
+  std::vector<float> dist(k);
+  std::unique_ptr<KdTree<3>> tree;  // for sparse places
+  struct Cursor {
+    std::uint32_t at, end;
+  };
+  Cursor cur[9];
+  for (std::size_t r = 0; r < num_rows; ++r) {
+    const std::int64_t iy = static_cast<std::int64_t>(row_id[r] % ny);
+    const std::int64_t iz = static_cast<std::int64_t>(row_id[r] / ny);
+    int num_cur = 0;
+    for (std::int64_t z = std::max<std::int64_t>(0, iz - 1); z <= iz + 1 && z < static_cast<std::int64_t>(nz); ++z) {
+      for (std::int64_t y = std::max<std::int64_t>(0, iy - 1); y <= iy + 1 && y < static_cast<std::int64_t>(ny); ++y) {
+        const std::uint32_t nr = find_row(static_cast<std::uint64_t>(y) + ny * static_cast<std::uint64_t>(z));
+        if (nr != kNoRow) cur[num_cur++] = Cursor{row_begin[nr], row_begin[nr + 1]};
+      }
+    }
+    for (std::uint32_t q = row_begin[r]; q < row_begin[r + 1]; ++q) {
+      const Vector3f& p = pts[q];
+      const std::int64_t lo = ix[q] - 1, hi = ix[q] + 1;
+      // Advance the cursors even for skipped queries: they must not fall behind.
+      for (int c = 0; c < num_cur; ++c) {
+        while (cur[c].at < cur[c].end && ix[cur[c].at] < lo) ++cur[c].at;
+      }
+      if (!(p.z() <= settings.normal_max_z)) continue;
+      // The k nearest of the block within the radius (sorted insertion, as the kd-tree's).
+      std::size_t count = 0, num_block = 0;
+      float worst = r_sq;  // <= worst to enter; < the k-th once k are held
+      for (int c = 0; c < num_cur; ++c) {
+        for (std::uint32_t a = cur[c].at; a < cur[c].end && ix[a] <= hi; ++a) {
+          const Vector3f& t = pts[a];
+          const float dx = t.x() - p.x(), dy = t.y() - p.y(), dz = t.z() - p.z();
+          const float d = dx * dx + dy * dy + dz * dz;
+          num_block += d <= r_sq ? 1 : 0;
+          if (!(d <= worst) || (count == k && !(d < dist[k - 1]))) continue;
+          std::size_t j = count < k ? count++ : k - 1;
+          while (j > 0 && dist[j - 1] > d) {
+            dist[j] = dist[j - 1];
+            idx[j] = idx[j - 1];
+            --j;
+          }
+          dist[j] = d;
+          idx[j] = a;
+          if (count == k) worst = std::min(worst, dist[k - 1]);
+        }
+      }
+      std::size_t n = count;
+      if (num_block < settings.normal_min_block) {  // a sparse place
+        if (!tree) tree = std::make_unique<KdTree<3>>(pts);
+        n = tree->knn(p, k, idx.data(), dist.data());
+        while (n > 0 && dist[n - 1] > r_sq) --n;
+      }
+      Vector3f normal;
+      float curv = nan;
+      const bool ok = pca_normal(pts, idx.data(), n, normal, curv);
+      if (!ok) continue;
+      if (normal.dot(settings.viewpoint - p) < 0.0f) normal = -normal;
+      normals[q] = normal;
+    }
+  }
 }
 
 }  // namespace detail
@@ -124,30 +279,15 @@ inline FrameSample sample_frame(const PointCloud& cloud, const FrameSampleSettin
   out.voxel_size = settings.voxel_size;
   for (const Vector3f& p : cloud.points) out.num_finite += p.allFinite() ? 1 : 0;
   if (out.num_finite >= 3) {
-    out.source = detail::voxel_sample(cloud.points, settings.voxel_size);
+    detail::KeyedVoxelSample vs = detail::voxel_sample_keyed(cloud.points, settings.voxel_size);
+    out.source = std::move(vs.source);
     out.points.resize(out.source.size());
     for (std::size_t j = 0; j < out.source.size(); ++j) out.points[j] = cloud.points[out.source[j]];
     if (out.points.size() >= 3) {
-      const KdTree<3> tree(out.points);
-      NormalSettings ns;
-      ns.k = settings.normal_k;
-      ns.radius = settings.normal_radius;
-      ns.viewpoint = settings.viewpoint;
-      ns.orient_to_viewpoint = true;
-      if (std::isinf(settings.normal_max_z) && settings.normal_max_z > 0.0f) {
-        out.normals = estimate_normals(out.points, tree, out.points, ns).normals;
+      if (settings.normals == FrameNormals::kVoxelBlock) {
+        detail::sample_normals_voxel_block(out.points, vs.keys, vs.layout, settings, out.normals);
       } else {
-        std::vector<Vector3f> queries;
-        std::vector<std::size_t> where;
-        for (std::size_t i = 0; i < out.points.size(); ++i) {
-          if (out.points[i].z() <= settings.normal_max_z) {
-            queries.push_back(out.points[i]);
-            where.push_back(i);
-          }
-        }
-        out.normals.assign(out.points.size(), Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
-        const NormalResult nr = estimate_normals(queries, tree, out.points, ns);
-        for (std::size_t j = 0; j < where.size(); ++j) out.normals[where[j]] = nr.normals[j];
+        detail::sample_normals_kdtree(out.points, settings, out.normals);
       }
       out.status = Status::kOk;
     } else {
