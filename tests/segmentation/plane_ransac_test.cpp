@@ -78,6 +78,44 @@ TEST(PresegmentTest, SelectsByAngleAndLength) {
   EXPECT_THROW(presegment(pts, std::vector<Vector3f>(2), s), Error);
 }
 
+// presegment() decides the angle window on cosines; the selection must be the one the angles of
+// eq. 8 / eq. 12 give, also for normals exactly at a window's edge and for windows at 0 and pi.
+TEST(PresegmentTest, CosineWindowSelectsAsTheAngles) {
+  Rng rng(17);
+  std::vector<Vector3f> pts, normals;
+  const std::vector<double> edges = {-0.1, 0.0, 1e-6, 10 * kDeg, 15 * kDeg, 45 * kDeg, 90 * kDeg, 170 * kDeg, kPi, 4.0};
+  for (int i = 0; i < 4000; ++i) {
+    pts.emplace_back(rng.uniform(-5, 5), rng.uniform(-5, 5), rng.uniform(-3, 3));
+    Vector3d n(rng.normal(), rng.normal(), rng.normal());
+    if (i % 3 == 0) {  // exactly at an edge angle to z (as exactly as float allows)
+      const double a = edges[rng.uniform_index(edges.size())], phi = rng.uniform(0, 2 * kPi);
+      n = Vector3d(std::sin(a) * std::cos(phi), std::sin(a) * std::sin(phi), std::cos(a));
+    }
+    if (i % 7 == 0) n = Vector3d::UnitZ();
+    if (i % 11 == 0) n = Vector3d(1, 0, 0);
+    if (i % 101 == 0) n.setZero();
+    normals.push_back(n.cast<float>());
+  }
+  for (const PresegmentAngle kind : {PresegmentAngle::kNormalToAxis, PresegmentAngle::kVerticalU}) {
+    for (double lo : edges) {
+      for (double hi : edges) {
+        PresegmentSettings s;
+        s.angle_kind = kind;
+        s.axis = Vector3d(0, 0, 2);
+        s.min_angle = lo;
+        s.max_angle = hi;
+        std::vector<std::size_t> expected;
+        for (std::size_t i = 0; i < pts.size(); ++i) {
+          const double theta = kind == PresegmentAngle::kNormalToAxis ? normal_axis_angle(normals[i], s.axis)
+                                                                       : vertical_u_angle(normals[i]);
+          if (theta >= lo && theta <= hi) expected.push_back(i);
+        }
+        ASSERT_EQ(presegment(pts, normals, s), expected) << "lo " << lo << " hi " << hi;
+      }
+    }
+  }
+}
+
 // ---- RANSAC ------------------------------------------------------------------------------------
 
 TEST(PlaneRansacTest, RecoversPlaneAmongOutliers) {
