@@ -78,18 +78,18 @@ inline SegmentResult segment_frame(const PointCloud& cloud, const SegmentSetting
   out.vertical = extract_vertical_planes(cloud, sample, &out.ground, settings.vertical);
   out.timings.vertical = out.vertical.seconds;
 
-  out.labels.assign(cloud.points.size(), kSegmentOther);
+  // Vertical labels first (one vectorizable pass), then ground (ground inliers are never vertical).
+  const std::size_t n = cloud.points.size();
+  out.labels.resize(n);
+  const std::int32_t* plane_of = out.vertical.plane_of_point.data();
+  std::int32_t* labels = out.labels.data();
+  for (std::size_t i = 0; i < n; ++i) labels[i] = plane_of[i] >= 0 ? kSegmentVertical : kSegmentOther;
+  out.num_vertical = out.vertical.num_points;
   if (out.ground.status == Status::kOk) {
-    for (std::size_t i : out.ground.inliers) out.labels[i] = kSegmentGround;
+    for (std::size_t i : out.ground.inliers) labels[i] = kSegmentGround;
+    out.num_ground = out.ground.inliers.size();
   }
-  for (std::size_t i = 0; i < out.labels.size(); ++i) {
-    if (out.vertical.plane_of_point[i] >= 0) out.labels[i] = kSegmentVertical;
-  }
-  for (std::int32_t l : out.labels) {
-    out.num_ground += l == kSegmentGround ? 1 : 0;
-    out.num_vertical += l == kSegmentVertical ? 1 : 0;
-  }
-  out.num_other = out.labels.size() - out.num_ground - out.num_vertical;
+  out.num_other = n - out.num_ground - out.num_vertical;
   out.status = out.ground.status;
   out.timings.total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;

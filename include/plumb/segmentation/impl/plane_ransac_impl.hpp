@@ -267,6 +267,11 @@ inline PlaneRansacResult fit_plane_ransac(const std::vector<Vector3f>& points,
   c.y.reserve(m);
   c.z.reserve(m);
   c.index.reserve(m);
+  if (c.has_normals) {
+    c.nx.reserve(m);
+    c.ny.reserve(m);
+    c.nz.reserve(m);
+  }
   if (point_normal) sample_normals.reserve(m);
   for (std::size_t j = 0; j < m; ++j) {
     const std::size_t i = candidates.empty() ? j : candidates[j];
