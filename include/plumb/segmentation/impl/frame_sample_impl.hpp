@@ -229,16 +229,29 @@ inline void sample_normals_voxel_block(const std::vector<Vector3f>& pts, const s
         while (cur[c].at < cur[c].end && ix[cur[c].at] < lo) ++cur[c].at;
       }
       if (!(p.z() <= settings.normal_max_z)) continue;
-      // The k nearest of the block within the radius (sorted insertion, as the kd-tree's).
-      std::size_t count = 0, num_block = 0;
-      float worst = r_sq;  // <= worst to enter; < the k-th once k are held
+      // The block's points within the radius (at most 27: one per voxel), then the k nearest of
+      // them by sorted insertion (as the kd-tree's) when there are more than k.
+      std::uint32_t block_idx[27];
+      float block_d[27];
+      std::size_t num_block = 0;
       for (int c = 0; c < num_cur; ++c) {
         for (std::uint32_t a = cur[c].at; a < cur[c].end && ix[a] <= hi; ++a) {
           const Vector3f& t = pts[a];
           const float dx = t.x() - p.x(), dy = t.y() - p.y(), dz = t.z() - p.z();
           const float d = dx * dx + dy * dy + dz * dz;
+          block_idx[num_block] = a;
+          block_d[num_block] = d;
           num_block += d <= r_sq ? 1 : 0;
-          if (!(d <= worst) || (count == k && !(d < dist[k - 1]))) continue;
+        }
+      }
+      std::size_t count = 0;
+      if (num_block <= k) {
+        for (std::size_t b = 0; b < num_block; ++b) idx[b] = block_idx[b];
+        count = num_block;
+      } else {
+        for (std::size_t b = 0; b < num_block; ++b) {
+          const float d = block_d[b];
+          if (count == k && !(d < dist[k - 1])) continue;
           std::size_t j = count < k ? count++ : k - 1;
           while (j > 0 && dist[j - 1] > d) {
             dist[j] = dist[j - 1];
@@ -246,8 +259,7 @@ inline void sample_normals_voxel_block(const std::vector<Vector3f>& pts, const s
             --j;
           }
           dist[j] = d;
-          idx[j] = a;
-          if (count == k) worst = std::min(worst, dist[k - 1]);
+          idx[j] = block_idx[b];
         }
       }
       std::size_t n = count;
