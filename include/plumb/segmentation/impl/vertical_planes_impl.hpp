@@ -177,41 +177,43 @@ inline VerticalPlanesResult extract_vertical_planes(const PointCloud& cloud, con
     const float tau = static_cast<float>(s.distance_threshold);
     const std::vector<Vector3f>& pts = cloud.points;
     const std::size_t n = pts.size();
-    // Planes in groups of 32: one branch-free pass per plane marks the points within tau of it (the
-    // same float test as contains(), so no point is missed), then only marked points are checked
-    // against the planes' extents, in plane order (the first plane that contains a point wins).
-    std::vector<float> px(n), py(n), pz(n);  // coordinates as arrays: the passes vectorize
-    for (std::size_t i = 0; i < n; ++i) {
-      px[i] = pts[i].x();
-      py[i] = pts[i].y();
-      pz[i] = pts[i].z();
-    }
-    std::vector<std::uint32_t> near(n);
-    for (std::size_t first = 0; first < lab.size(); first += 32) {
-      const std::size_t last = std::min(lab.size(), first + 32);
-      std::fill(near.begin(), near.end(), 0u);
-      for (std::size_t k = first; k < last; ++k) {
-        const float a = lab[k].a, b = lab[k].b, c = lab[k].c, d = lab[k].d;
-        const std::uint32_t bit = std::uint32_t{1} << (k - first);
-        std::uint32_t* mark = near.data();
-        const float* x = px.data();
-        const float* y = py.data();
-        const float* z = pz.data();
-        for (std::size_t i = 0; i < n; ++i) {
-          mark[i] |= std::abs(a * x[i] + b * y[i] + c * z[i] - d) < tau ? bit : 0u;  // NaN: no
-        }
+    // Points in chunks that stay in L1, planes in groups of 32: one branch-free pass per plane marks
+    // the chunk's points within tau of it (the same float test as contains(), so no point is
+    // missed), then only marked points are checked against the planes' extents, in plane order (the
+    // first plane that contains a point wins).
+    constexpr std::size_t kChunk = 1024;
+    float x[kChunk], y[kChunk], z[kChunk];  // the chunk's coordinates as arrays: the passes vectorize
+    std::uint32_t near[kChunk];
+    for (std::size_t base = 0; base < n; base += kChunk) {
+      const std::size_t len = std::min(kChunk, n - base);
+      for (std::size_t i = 0; i < len; ++i) {
+        x[i] = pts[base + i].x();
+        y[i] = pts[base + i].y();
+        z[i] = pts[base + i].z();
       }
-      for (std::size_t i = 0; i < n; ++i) {
-        std::uint32_t m = near[i];
-        if (m == 0 || is_ground[i] != 0 || out.plane_of_point[i] >= 0) continue;
-        while (m != 0) {
-          const std::size_t k = first + static_cast<std::size_t>(__builtin_ctz(m));
-          m &= m - 1;
-          if (lab[k].contains(pts[i], tau)) {
-            out.plane_of_point[i] = static_cast<std::int32_t>(k);
-            out.planes[k].num_points += 1;
-            out.num_points += 1;
-            break;
+      for (std::size_t first = 0; first < lab.size(); first += 32) {
+        const std::size_t last = std::min(lab.size(), first + 32);
+        std::fill(near, near + len, 0u);
+        for (std::size_t k = first; k < last; ++k) {
+          const float a = lab[k].a, b = lab[k].b, c = lab[k].c, d = lab[k].d;
+          const std::uint32_t bit = std::uint32_t{1} << (k - first);
+          for (std::size_t i = 0; i < len; ++i) {
+            near[i] |= std::abs(a * x[i] + b * y[i] + c * z[i] - d) < tau ? bit : 0u;  // NaN: no
+          }
+        }
+        for (std::size_t i = 0; i < len; ++i) {
+          std::uint32_t m = near[i];
+          const std::size_t g = base + i;
+          if (m == 0 || is_ground[g] != 0 || out.plane_of_point[g] >= 0) continue;
+          while (m != 0) {
+            const std::size_t k = first + static_cast<std::size_t>(__builtin_ctz(m));
+            m &= m - 1;
+            if (lab[k].contains(pts[g], tau)) {
+              out.plane_of_point[g] = static_cast<std::int32_t>(k);
+              out.planes[k].num_points += 1;
+              out.num_points += 1;
+              break;
+            }
           }
         }
       }
