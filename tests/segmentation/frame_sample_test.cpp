@@ -186,6 +186,45 @@ TEST(FrameSampleTest, VoxelBlockNormalsOnARealFrame) {
   expect_block_normals_match_brute_force(io::read_cloud(hdl32), FrameSampleSettings{});
 }
 
+// The trigonometry-free smallest eigenvector against Eigen's closed form (normal_from_covariance):
+// the same normal (as a line) and the same verdict on degenerate neighbourhoods, for flat, thin,
+// isotropic, collinear, coincident and badly scaled point sets.
+TEST(FrameSampleTest, FastCovarianceNormalMatchesClosedForm) {
+  Rng rng(31);
+  int num_checked = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const int kind = trial % 6;
+    const double scale = std::pow(10.0, rng.uniform(-3, 3));
+    const Eigen::Matrix3d R = Eigen::Quaterniond(rng.normal(), rng.normal(), rng.normal(), rng.normal()).normalized().toRotationMatrix();
+    Eigen::Vector3d sd(1.0, rng.uniform(0.05, 1.0), rng.uniform(0.0, 0.05));  // flat
+    if (kind == 1) sd.z() = rng.uniform(0.0, 1e-4);                         // very flat
+    if (kind == 2) sd = Eigen::Vector3d(1.0, rng.uniform(0.9, 1.0), rng.uniform(0.9, 1.0));  // isotropic
+    if (kind == 3) sd = Eigen::Vector3d(1.0, std::pow(10.0, rng.uniform(-6, -1)), 0.0);  // thin to collinear
+    if (kind == 4) sd = Eigen::Vector3d::Zero();                           // coincident
+    std::vector<Vector3f> pts;
+    for (int i = 0; i < 3 + trial % 20; ++i) {
+      const Eigen::Vector3d local(sd.x() * rng.normal(), sd.y() * rng.normal(), sd.z() * rng.normal());
+      pts.push_back((Eigen::Vector3d(5, -2, 1) + scale * (R * local)).cast<float>());
+    }
+    std::vector<std::size_t> idx(pts.size());
+    for (std::size_t i = 0; i < idx.size(); ++i) idx[i] = i;
+    const Eigen::Matrix3d cov = detail::neighbourhood_covariance(pts, idx.data(), idx.size());
+    Vector3f ref = Vector3f::Zero(), fast = Vector3f::Zero();
+    float curv = 0.0f;
+    const bool ok_ref = detail::normal_from_covariance(cov, ref, curv);
+    const bool ok_fast = detail::normal_from_covariance_fast(cov, fast);
+    ASSERT_EQ(ok_fast, ok_ref) << "trial " << trial;
+    if (!ok_ref) continue;
+    EXPECT_NEAR(fast.norm(), 1.0f, 1e-5f) << trial;
+    // isotropic sets have no stable normal: both sides only have to agree where there is one
+    if (kind != 2) {
+      EXPECT_GT(std::abs(fast.dot(ref)), 0.99999f) << "trial " << trial << " kind " << kind;
+    }
+    ++num_checked;
+  }
+  EXPECT_GT(num_checked, 1500);
+}
+
 TEST(FrameSampleTest, EmptyNanAndBadSettings) {
   PointCloud empty;
   EXPECT_EQ(sample_frame(empty).status, Status::kInsufficientData);

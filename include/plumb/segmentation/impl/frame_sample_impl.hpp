@@ -130,6 +130,49 @@ inline std::vector<std::size_t> voxel_sample(const std::vector<Vector3f>& pts, d
   return voxel_sample_keyed(pts, leaf).source;
 }
 
+/// normal_from_covariance() (features/normals.hpp) without trigonometry where the smallest
+/// eigenvalue is well separated, which is the case on surfaces: the smallest root of the
+/// characteristic polynomial by Newton's method from 0 (the cubic is increasing and concave up to
+/// that root, so the iterates rise monotonically onto it), the other two from the remaining
+/// quadratic, the eigenvector as the longest cross product of two rows of C - lambda0 I (as Eigen's
+/// closed form does). When lambda1 - lambda0 < 1e-3 lambda2 (no clear normal, and every thin or
+/// collinear set) it defers to normal_from_covariance(), which applies the degeneracy rule.
+inline bool normal_from_covariance_fast(const Eigen::Matrix3d& cov, Vector3f& normal) {
+  const double trace = cov.trace();
+  if (!(trace > 0.0) || !std::isfinite(trace)) return false;
+  const Eigen::Matrix3d c = cov * (1.0 / trace);  // eigenvalues in [0, 1], summing to 1
+  const double c1 = c(0, 0) * c(1, 1) - c(0, 1) * c(0, 1) + c(0, 0) * c(2, 2) - c(0, 2) * c(0, 2) +
+                    c(1, 1) * c(2, 2) - c(1, 2) * c(1, 2);
+  const double det = c.determinant();
+  // f(l) = l^3 - l^2 + c1 l - det, f(0) = -det <= 0.
+  double l0 = 0.0;
+  for (int it = 0; it < 64; ++it) {
+    const double f = ((l0 - 1.0) * l0 + c1) * l0 - det;
+    const double df = (3.0 * l0 - 2.0) * l0 + c1;
+    if (!(df > 0.0)) break;
+    const double step = -f / df;
+    if (!(step > 1e-17)) break;
+    l0 += step;
+  }
+  const double sum12 = 1.0 - l0;                        // l1 + l2
+  const double prod12 = std::max(0.0, c1 - l0 * sum12);  // l1 l2
+  const double l2 = 0.5 * sum12 + std::sqrt(std::max(0.0, 0.25 * sum12 * sum12 - prod12));
+  const double l1 = l2 > 0.0 ? prod12 / l2 : 0.0;
+  if (!(l1 - l0 >= 1e-3 * l2) || !std::isfinite(l0)) {
+    float curv = 0.0f;
+    return normal_from_covariance(cov, normal, curv);
+  }
+  Eigen::Matrix3d m = c;
+  m.diagonal().array() -= l0;
+  const Eigen::Vector3d a = m.row(0).cross(m.row(1)), b = m.row(0).cross(m.row(2)), d = m.row(1).cross(m.row(2));
+  const double na = a.squaredNorm(), nb = b.squaredNorm(), nd = d.squaredNorm();
+  const Eigen::Vector3d& v = na >= nb ? (na >= nd ? a : d) : (nb >= nd ? b : d);
+  const double len = v.norm();
+  if (!(len > 0.0)) return false;
+  normal = (v / len).cast<float>();
+  return normal.allFinite();
+}
+
 /// Normals of the sample by a kd-tree over it: estimate_normals() with the settings' k and radius
 /// (FrameNormals::kNearest), for the points at or below normal_max_z.
 inline void sample_normals_kdtree(const std::vector<Vector3f>& pts, const FrameSampleSettings& settings,
@@ -269,9 +312,7 @@ inline void sample_normals_voxel_block(const std::vector<Vector3f>& pts, const s
         while (n > 0 && dist[n - 1] > r_sq) --n;
       }
       Vector3f normal;
-      float curv = nan;
-      const bool ok = pca_normal(pts, idx.data(), n, normal, curv);
-      if (!ok) continue;
+      if (n < 3 || !normal_from_covariance_fast(neighbourhood_covariance(pts, idx.data(), n), normal)) continue;
       if (normal.dot(settings.viewpoint - p) < 0.0f) normal = -normal;
       normals[q] = normal;
     }
