@@ -134,7 +134,8 @@ HybridLio::HybridLio(const Eigen::Isometry3d& T_world_base0, const HybridLioSett
   PLUMB_CHECK(s.plane_sigma > 0.0 && s.edge_sigma > 0.0 && s.point_sigma > 0.0 && s.huber_scale > 0.0,
               "HybridLio: settings.plane_sigma / edge_sigma / point_sigma / huber_scale must be > 0");
   PLUMB_CHECK(s.min_correspondences >= 6, "HybridLio: settings.min_correspondences must be >= 6");
-  PLUMB_CHECK(s.icp_voxel_size > 0.0, "HybridLio: settings.icp_voxel_size must be > 0");
+  PLUMB_CHECK(s.icp_voxel_size > 0.0 && s.plane_query_voxel > 0.0 && s.ground_query_voxel > 0.0,
+              "HybridLio: settings.icp_voxel_size / plane_query_voxel / ground_query_voxel must be > 0");
   PLUMB_CHECK(s.gravity > 0.0 && std::isfinite(s.gravity), "HybridLio: settings.gravity must be > 0");
   PLUMB_CHECK(s.max_imu_gap > 0.0, "HybridLio: settings.max_imu_gap must be > 0");
   PLUMB_CHECK(s.map_rebuild_distance >= 0.0 && s.map_rebuild_frames >= 1,
@@ -387,18 +388,33 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
 
   // ICP queries: the frame, one point per voxel.
   PointCloud icp_points;
-  {
-    VoxelHashMap ds({set.icp_voxel_size, 1, 1e12, std::numeric_limits<std::size_t>::max()});
-    // Off the ground only: nearest-point pairs on the rings of a flat road pull the frame back
-    // onto the last one (the rings barely move with the sensor); height, roll and pitch come from
-    // the IMU and the previous state.
-    std::vector<Vector3f> off;
-    off.reserve(cloud.size());
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-      if (!ground[i]) off.push_back(cloud.points[i]);
-    }
-    ds.insert(off);
-    icp_points.points = ds.points();
+  std::vector<Vector3f> off, on;
+  off.reserve(cloud.size());
+  on.reserve(cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) (ground[i] ? on : off).push_back(cloud.points[i]);
+  auto downsample = [](const std::vector<Vector3f>& pts, double voxel) {
+    VoxelHashMap ds({voxel, 1, 1e12, std::numeric_limits<std::size_t>::max()});
+    ds.insert(pts);
+    return ds.points();
+  };
+  // Off the ground only: nearest-point pairs on the rings of a flat road pull the frame back
+  // onto the last one (the rings barely move with the sensor); height, roll and pitch come from
+  // the IMU and the previous state.
+  icp_points.points = downsample(off, set.icp_voxel_size);
+  // Scan-to-map plane queries (LOAM's mapping step matches every "less flat" point, not only the
+  // few selected per sector, which on an open site are nearly all on the road): the structure
+  // off the ground on a fine grid, the ground on a coarse one (it only fixes height, roll, pitch).
+  // The map association keeps only neighbourhoods that fit a plane.
+  // Ground queries on their own as well: ICP frames match them point-to-plane against the plane
+  // map (LeGO-LOAM's ground step: height, roll and pitch from the road in every mode).
+  LoamFeatures ground_feats;
+  ground_feats.planes.points = downsample(on, set.ground_query_voxel);
+  if (set.dense_plane_queries) {
+    feats.planes.points = downsample(off, set.plane_query_voxel);
+    const std::vector<Vector3f>& g = ground_feats.planes.points;
+    feats.planes.points.insert(feats.planes.points.end(), g.begin(), g.end());
+    feats.plane_candidates.points.clear();
+    feats.plane_pool = feats.planes;
   }
 
   if (!initialized_) {
@@ -413,7 +429,9 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
 
   // 3. The hybrid switch (SEEDS B3.2).
   LioFrameMode lidar_mode = LioFrameMode::kLoam;
-  if (set.mode == LioMode::kHybrid && res.num_structure_planes < set.min_plane_points) lidar_mode = LioFrameMode::kIcp;
+  if (set.mode == LioMode::kHybrid && !set.switch_on_plane_matches && res.num_structure_planes < set.min_plane_points) {
+    lidar_mode = LioFrameMode::kIcp;
+  }
 
   LoamSettings ls;
   ls.max_correspondence_distance = set.max_correspondence_distance;
@@ -429,7 +447,7 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
   auto associate = [&](LioFrameMode m, const ImuState& x, std::vector<LoamCorrespondence>& corr) {
     corr.clear();
     const Eigen::Isometry3d T_world_lidar = pose_of(x) * T_imu_lidar_;
-    if (m == LioFrameMode::kLoam) {
+    if (m == LioFrameMode::kLoam || set.icp_ground_planes) {
       if (!loam_tree_ || stale(loam_built_at_, loam_built_frame_)) {
         PointCloud e, p;
         e.points = edge_map_.points();
@@ -438,6 +456,8 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
         loam_built_at_ = here;
         loam_built_frame_ = num_frames_;
       }
+    }
+    if (m == LioFrameMode::kLoam) {
       loam_associate_map(*loam_tree_, feats, T_world_lidar, ls, corr);
     } else {
       if (!point_tree_ || stale(point_built_at_, point_built_frame_)) {
@@ -449,6 +469,11 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
       }
       loam_associate_points(point_cloud_, *point_tree_, icp_points, T_world_lidar, set.max_correspondence_distance,
                             corr);
+      // Too few ICP pairs is what makes the frame fall back to the prediction; ground planes alone
+      // do not count (they fix neither x, y nor yaw).
+      if (set.icp_ground_planes && corr.size() >= set.min_correspondences) {
+        loam_associate_map(*loam_tree_, ground_feats, T_world_lidar, ls, corr);
+      }
     }
   };
 
@@ -513,6 +538,19 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
   for (int it = 0; it < set.max_iterations; ++it) {
     if (lidar_ok) {
       associate(lidar_mode, xj, corr);
+      if (it == 0 && set.mode == LioMode::kHybrid && set.switch_on_plane_matches) {
+        // The switch on what LOAM would use: plane residuals whose map plane is not flat (walls,
+        // roofs, not the road), the ones that fix x, y and yaw.
+        const double cos_flat = std::cos(set.ground_max_slope_deg * kPi / 180.0);
+        for (const LoamCorrespondence& c : corr) {
+          if (c.kind == LoamCorrespondence::Kind::kPlane && std::abs(c.dir.z()) < cos_flat) ++res.num_structure_matches;
+        }
+        if (res.num_structure_matches < set.min_plane_points) {
+          tried_icp = true;
+          lidar_mode = LioFrameMode::kIcp;
+          associate(lidar_mode, xj, corr);
+        }
+      }
       if (corr.size() < set.min_correspondences) {
         if (set.mode == LioMode::kHybrid && !tried_icp) {  // hybrid: LOAM found too little, try ICP
           tried_icp = true;

@@ -69,6 +69,11 @@ struct HybridLioSettings {
   /// LOAM residuals, fewer use ICP (SEEDS B3.2: 48). Ground points (the road) constrain only
   /// height, roll and pitch, so they do not count as structure.
   std::size_t min_plane_points = 48;
+  /// True: the switch counts the frame's plane residuals against the map whose plane is not flat
+  /// (LioFrameResult::num_structure_matches: what LOAM would really use off the ground); false: it
+  /// counts the selected plane features off the ground (num_structure_planes, at most 8 per sector,
+  /// which an open site fills with road points).
+  bool switch_on_plane_matches = true;
   /// Two vertically adjacent returns below the horizon whose joining segment is flatter than this
   /// are ground (LeGO-LOAM's ground test) [deg].
   double ground_max_slope_deg = 10.0;
@@ -94,6 +99,15 @@ struct HybridLioSettings {
   VoxelHashMapSettings plane_map{0.4, 1, 60.0, 100000};   ///< LOAM plane points
   VoxelHashMapSettings point_map{0.4, 4, 60.0, 150000};   ///< ICP points
   double icp_voxel_size = 0.6;  ///< a frame's ICP queries: one point per voxel of this size [m]
+  /// LOAM plane queries and plane map points: every return, off the ground one per voxel of
+  /// plane_query_voxel, on the ground one per ground_query_voxel (LOAM's mapping matches all "less
+  /// flat" points). False: the selected plane features and candidates only (4 + 4 per sector).
+  bool dense_plane_queries = true;
+  double plane_query_voxel = 0.3;   ///< see dense_plane_queries [m]
+  double ground_query_voxel = 0.3;  ///< see dense_plane_queries; also the ICP frames' ground queries [m]
+  /// ICP frames also match their ground returns point-to-plane against the plane map (the ICP
+  /// pairs come from off the ground only, so without this height, roll and pitch rest on the IMU).
+  bool icp_ground_planes = false;
   /// The maps' kd-trees are rebuilt (with every point added since) once the sensor has moved this
   /// far from where they were last built [m], or after map_rebuild_frames frames.
   double map_rebuild_distance = 1.0;
@@ -128,7 +142,10 @@ struct LioFrameResult {
   bool deskewed_with_imu = false;  ///< ... with the IMU
   std::size_t num_points = 0;            ///< points in the frame
   std::size_t num_plane_points = 0;      ///< plane features selected (all)
-  std::size_t num_structure_planes = 0;  ///< plane features off the ground (the switch's count)
+  std::size_t num_structure_planes = 0;  ///< plane features off the ground (the switch's count when
+                                         ///< settings.switch_on_plane_matches is false)
+  std::size_t num_structure_matches = 0; ///< hybrid: non-flat plane residuals at the first association
+                                         ///< (the switch's count when switch_on_plane_matches)
   std::size_t num_edge_points = 0;       ///< edge features selected
   std::size_t num_plane_interval = 0;    ///< points in the plane cos interval (SEEDS B1.2)
   std::size_t num_edge_interval = 0;     ///< points in the edge cos interval
