@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <utility>
 #include <limits>
 #include <vector>
 
@@ -11,6 +13,7 @@
 #include "plumb/features/fpfh.hpp"
 #include "plumb/features/normals.hpp"
 #include "plumb/io/cloud_io.hpp"
+#include "plumb/registration/localize.hpp"
 #include "plumb/registration/sac_ia.hpp"
 #include "test_data.hpp"
 
@@ -100,6 +103,57 @@ TEST(SacIaRegionTest, BadHintSettingsThrow) {
   s = twin_settings();
   s.exclude_distance = std::numeric_limits<double>::infinity();
   EXPECT_THROW(align_sac_ia(c.source, c.fs, c.target, c.ft, tree, s), Error);
+}
+
+TEST(LocalizeAmbiguityTest, TwoCopiesAreAmbiguousUnlessHinted) {
+  const TwinCase c = twin_case();
+  LocalizeSettings s = localize_settings_for_voxel(0.005);
+  s.ambiguity_margin = 0.1;
+  s.ambiguity_distance = 0.3;
+  PointCloud source = c.source, target = c.target;
+  source.normals.clear();
+  target.normals.clear();
+  const LocalizeResult both = localize_coarse_to_fine(source, target, s);
+  std::printf("  twins: %s, overlap %.2f, second %.2f\n", to_string(both.status), both.overlap, both.second_overlap);
+  EXPECT_TRUE(both.ambiguous);
+  EXPECT_EQ(both.status, Status::kRejected);
+  EXPECT_GT(both.second_overlap, 0.9 * both.overlap);
+  // The hint leaves one copy: the same search is then unambiguous and lands on it.
+  s.sac_ia.region_center = c.T_second.translation();
+  s.sac_ia.region_radius = 0.3;
+  const LocalizeResult hinted = localize_coarse_to_fine(source, target, s);
+  EXPECT_FALSE(hinted.ambiguous);
+  EXPECT_EQ(hinted.status, Status::kOk);
+  EXPECT_LT(pose_distance(hinted.T_target_source, c.T_second), 0.01);
+}
+
+TEST(LocalizeTargetTest, SplitByNormalKeepsBothFacesOfAThinWall) {
+  // A 4 cm thick wall sampled on both faces, voxel 0.1 m: one voxel holds points of both faces.
+  PointCloud wall;
+  for (int i = 0; i < 40; ++i) {
+    for (int k = 0; k < 40; ++k) {
+      for (float y : {0.0f, 0.04f}) {
+        wall.points.emplace_back(0.025f * i, y, 0.025f * k);
+        wall.normals.emplace_back(0.0f, y > 0.0f ? 1.0f : -1.0f, 0.0f);
+      }
+    }
+  }
+  auto faces = [](const PointCloud& c) {
+    std::size_t plus = 0, minus = 0;
+    for (const Vector3f& n : c.normals) (n.y() > 0 ? plus : minus) += 1;
+    return std::make_pair(plus, minus);
+  };
+  LocalizeSettings s;
+  s.voxel_size = 0.1;
+  s.fine_voxel_size = 0.05;
+  s.split_target_by_normal = true;
+  const LocalizeTarget split = prepare_localize_target(wall, s);
+  const auto [plus, minus] = faces(split.coarse);
+  EXPECT_EQ(plus, minus);        // every voxel of the wall once per face
+  EXPECT_EQ(plus, 10u * 10u);    // 1 m x 1 m at 0.1 m
+  s.split_target_by_normal = false;
+  const LocalizeTarget merged = prepare_localize_target(wall, s);
+  EXPECT_EQ(merged.coarse.size(), 100u);  // one point per voxel, whichever face it came from
 }
 
 }  // namespace
