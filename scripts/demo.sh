@@ -17,14 +17,9 @@ for example in build/release/examples/plumb_example_*; do
   "$example"
 done
 
-# The main job on the built-in sample: a robot simulated in the demo office (examples/data), then the
-# BIM-corrected odometry over its frames, with the seed's Table 2 against the exact ground truth.
-demo_dir="build/release/demo"
-rm -rf "$demo_dir"
-mkdir -p "$demo_dir"
+# The main job on the built-in sample: `plumb demo` writes the demo office (IFC4), simulates a robot
+# driving two loops through it, localizes its first frame in the model, runs the BIM-corrected
+# odometry and prints the seed's Table 2 against the exact ground truth (trajectory.svg beside it).
 echo
-echo "== plumb simulate examples/data/demo_office.ifc (20 m, rfans32)"
-./build/release/examples/plumb simulate examples/data/demo_office.ifc -o "$demo_dir/dump" --length 20 --threads "$(nproc)"
-echo
-echo "== plumb run (BIM-corrected odometry; trajectories and trajectory.svg in $demo_dir/run)"
-./build/release/examples/plumb run "$demo_dir/dump" --bim examples/data/demo_office.ifc -o "$demo_dir/run" --gt-start
+echo "== plumb demo"
+./build/release/examples/plumb demo -o build/release/demo --threads "$(nproc)"

@@ -71,6 +71,21 @@ void deskew_frame(PointCloud& frame, double stamp, const Eigen::Isometry3d& T_ba
   }
 }
 
+PointCloud sample_bim_cloud(const bim::BimMesh& mesh, double spacing) {
+  static const std::set<std::string> kInvisible = {"IFCDOOR", "IFCWINDOW", "IFCSPACE", "IFCOPENINGELEMENT",
+                                                   "IFCFURNISHINGELEMENT", "IFCFURNITURE"};
+  bim::SurfaceSampleSettings ss;
+  ss.spacing = spacing;
+  std::set<std::string> types;
+  for (const bim::BimElement& e : mesh.elements) {
+    std::string upper = e.type;
+    std::transform(upper.begin(), upper.end(), upper.begin(), [](unsigned char c) { return std::toupper(c); });
+    if (!kInvisible.count(upper) && e.num_triangles > 0) types.insert(e.type);
+  }
+  ss.filter.types.assign(types.begin(), types.end());
+  return bim::sample_surface(mesh, ss);
+}
+
 RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& mesh, const RunSettings& settings) {
   PLUMB_CHECK(dump.num_frames() > 0, dump.dir() << ": the dump has no frame");
   PLUMB_CHECK(dump.has_odometry(), dump.dir() << ": the dump has no odom.csv (wheel odometry is the front end's prior)");
@@ -79,19 +94,7 @@ RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& 
   const OdometryInterpolator odom(dump.odometry());
   const Eigen::Isometry3d T_base_lidar = dump.meta().T_base_lidar;
 
-  // BIM cloud: every element the LiDAR can see (doors are open, windows transmit).
-  static const std::set<std::string> kInvisible = {"IFCDOOR", "IFCWINDOW", "IFCSPACE", "IFCOPENINGELEMENT",
-                                                   "IFCFURNISHINGELEMENT", "IFCFURNITURE"};
-  bim::SurfaceSampleSettings ss;
-  ss.spacing = settings.bim_spacing;
-  std::set<std::string> types;
-  for (const bim::BimElement& e : mesh.elements) {
-    std::string upper = e.type;
-    std::transform(upper.begin(), upper.end(), upper.begin(), [](unsigned char c) { return std::toupper(c); });
-    if (!kInvisible.count(upper) && e.num_triangles > 0) types.insert(e.type);
-  }
-  ss.filter.types.assign(types.begin(), types.end());
-  auto bim_cloud = std::make_shared<PointCloud>(bim::sample_surface(mesh, ss));
+  auto bim_cloud = std::make_shared<PointCloud>(sample_bim_cloud(mesh, settings.bim_spacing));
   report.bim_points = bim_cloud->size();
 
   const std::size_t n = settings.max_frames > 0 ? std::min(settings.max_frames, dump.num_frames()) : dump.num_frames();
@@ -103,14 +106,22 @@ RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& 
     return f;
   };
 
-  // SEEDS A1: the first frame in the BIM.
+  // SEEDS A1: the first frame in the BIM (kept for the first step of the loop).
+  std::optional<PointCloud> first_frame;
   const auto t_loc = std::chrono::steady_clock::now();
   if (settings.initial_pose) {
     report.T_bim_base0 = *settings.initial_pose;
   } else {
     report.localized = true;
-    PointCloud first = frame_at(0);
-    report.localization = localize_coarse_to_fine(first, *bim_cloud, settings.localize);
+    first_frame = frame_at(0);
+    LocalizeSettings ls = settings.localize;
+    if (settings.start_hint) {
+      PLUMB_CHECK(settings.start_hint->allFinite() && settings.start_hint_radius > 0.0,
+                  "run_bim_odometry: the start hint must be finite and its radius > 0");
+      ls.sac_ia.region_center = *settings.start_hint;
+      ls.sac_ia.region_radius = settings.start_hint_radius;
+    }
+    report.localization = localize_coarse_to_fine(*first_frame, *bim_cloud, ls);
     report.localization_status = report.localization.status;
     report.T_bim_base0 = report.localization.T_target_source * T_base_lidar.inverse();
   }
@@ -139,7 +150,7 @@ RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& 
   for (std::size_t i = 0; i < n; ++i) {
     const double stamp = dump.stamp(i);
     const Pose2 o = odom.at(stamp);
-    const PointCloud frame = frame_at(i);
+    PointCloud frame = (i == 0 && first_frame) ? std::move(*first_frame) : frame_at(i);
     BimFrameResult r = odometry.process(frame, stamp, o);
     report.wheel.push_back(stamp, report.T_bim_base0 * odom0.ominus().oplus(o).to_isometry());
     report.lidar.push_back(stamp, r.T_bim_base_uncorrected);
@@ -182,6 +193,14 @@ RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& 
     report.ape_rmse_wheel = rmse(report.wheel);
     report.ape_rmse_lidar = rmse(report.lidar);
     report.ape_rmse_bim = rmse(report.bim);
+    auto max_error = [&](const Trajectory& t) {
+      double m = 0.0;
+      for (std::size_t i = 0; i < n; ++i) m = std::max(m, horizontal_error(t.poses[i], gt.poses[i]));
+      return m;
+    };
+    report.max_error_wheel = max_error(report.wheel);
+    report.max_error_lidar = max_error(report.lidar);
+    report.max_error_bim = max_error(report.bim);
   }
   return report;
 }

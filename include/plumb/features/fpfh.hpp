@@ -28,6 +28,14 @@ struct FpfhSettings {
   /// Cap on the neighbourhood size, the point itself included (Open3D's max_nn): the nearest
   /// `max_neighbors` points within `radius` are kept. 0 = unlimited.
   std::size_t max_neighbors = 100;
+  /// Visible side only: when >= 0, a neighbour q of p counts only if each lies on the side of the
+  /// other's surface its normal points to: n_p · (q - p) >= -tol and n_q · (p - q) >= -tol [m].
+  /// A sensor cannot see behind a surface, while a model sampled on every face has points there
+  /// (the far face of a thin wall, the room behind it); this keeps most of them out of the model's
+  /// descriptors so they look like a scan's (surfaces coplanar across a wall, such as the next
+  /// room's floor, still pass: that would need ray casting). Negative (default) = plain FPFH
+  /// (Rusu 2009, Open3D, PCL).
+  float visible_side_tolerance = -1.0f;
 };
 
 /// @brief Descriptors of compute_fpfh().

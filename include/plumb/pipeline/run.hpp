@@ -30,6 +30,10 @@ struct RunSettings {
   /// (SEEDS A1, localize_coarse_to_fine).
   std::optional<Eigen::Isometry3d> initial_pose;
   LocalizeSettings localize;        ///< initial localization
+  /// Rough start position of the base in the BIM frame (x, y; z ignored), e.g. the room the robot
+  /// starts in: the localization only considers poses within start_hint_radius of it.
+  std::optional<Eigen::Vector3d> start_hint;
+  double start_hint_radius = 3.0;   ///< [m]
   bool deskew = true;               ///< undo motion distortion with the wheel odometry and per-point times
   std::size_t max_frames = 0;       ///< 0 = all
   std::function<void(std::size_t done, std::size_t total)> progress;  ///< called after each frame
@@ -64,7 +68,15 @@ struct RunReport {
   std::vector<ObservationRow> table;    ///< observation points at 1/3, 2/3 of the path and the end
   double path_length = 0.0;             ///< [m]
   double ape_rmse_wheel = 0.0, ape_rmse_lidar = 0.0, ape_rmse_bim = 0.0;  ///< horizontal, no alignment [m]
+  double max_error_wheel = 0.0, max_error_lidar = 0.0, max_error_bim = 0.0;  ///< largest horizontal error [m]
 };
+
+/// @brief The BIM cloud a LiDAR is registered to: the model's surfaces sampled every `spacing`
+///        metres with their face normals, skipping what a LiDAR does not see in the building
+///        (doors are open, windows transmit, spaces and opening volumes are not surfaces, and
+///        furnishing is not the structure).
+/// @throws plumb::Error when spacing is not positive
+PointCloud sample_bim_cloud(const bim::BimMesh& mesh, double spacing);
 
 /// @brief Run the BIM-corrected odometry over a frame dump (see the file comment).
 /// @return the report; the localization failing gives localization_status != kOk and no trajectory

@@ -43,6 +43,17 @@ struct LocalizeSettings {
   double normal_radius_factor = 2.0;    ///< normal radius = factor * voxel_size
   double fpfh_radius_factor = 5.0;      ///< FPFH radius = factor * voxel_size
   std::size_t fpfh_max_neighbors = 100; ///< FPFH neighbourhood cap (0 = unlimited)
+  /// FPFH on the visible side only (FpfhSettings::visible_side_tolerance = factor * voxel_size) for
+  /// both clouds, so that a model sampled on every face (both faces of a thin wall, the rooms behind
+  /// it) is described as a scan from inside sees it; negative (default) = plain FPFH.
+  /// @note Not on by default: on the demo office it did not yet turn failed localizations into
+  ///       good ones (issue 8 notes); descriptors of a model with hidden faces are much closer to a
+  ///       scan's with it (tests/features/fpfh_visible_side_test.cpp).
+  double fpfh_visible_side_factor = -1.0;
+  /// A target with normals is voxelised per normal direction (six signed axes), so that the two
+  /// faces of a wall thinner than a voxel stay two surfaces with their own normals instead of one
+  /// voxel whose point and normal come from either face.
+  bool split_target_by_normal = false;
   double huber_factor = 1.0;            ///< SAC-IA m1 = factor * voxel_size (replaces sac_ia.huber_threshold)
   double correspondence_factor = 3.0;   ///< SAC-IA truncation = factor * voxel_size (replaces sac_ia.max_correspondence_distance)
   /// SAC-IA; huber_threshold and max_correspondence_distance are replaced as above.
@@ -56,6 +67,14 @@ struct LocalizeSettings {
   /// Keep normals the target already has (a BIM cloud sampled from the model's faces); false
   /// estimates them from the points like the source's.
   bool use_target_normals = true;
+  /// Ambiguity test: after the first alignment, SAC-IA + ICP search again for the best alignment
+  /// at least ambiguity_distance / ambiguity_angle away from it; when that one's overlap is within
+  /// this fraction of the best (>= (1 - margin) * best), the result is kRejected with `ambiguous`
+  /// set, since the frame fits two places of the model. The better of the two is returned either
+  /// way. Negative (default): no second search (half the time).
+  double ambiguity_margin = -1.0;
+  double ambiguity_distance = 1.0;      ///< see ambiguity_margin [m]
+  double ambiguity_angle = 0.35;        ///< see ambiguity_margin [rad] (20 deg)
   /// Viewpoint of the source's normals, in the source frame (the sensor) [m].
   Vector3f source_viewpoint = Vector3f::Zero();
 };
@@ -99,12 +118,15 @@ struct LocalizeResult {
   double overlap = 0.0;            ///< ICP overlap ratio at the result, [0, 1]
   double rmse = 0.0;               ///< ICP RMS residual [m]
   double degeneracy = 0.0;         ///< see IcpResult::degeneracy
-  SacIaResult coarse;              ///< the SAC-IA stage
+  bool ambiguous = false;          ///< another place fits about as well (see LocalizeSettings::ambiguity_margin)
+  double second_overlap = 0.0;     ///< overlap of the best other alignment (0 when none was found)
+  Eigen::Isometry3d T_target_source_second = Eigen::Isometry3d::Identity();  ///< that alignment
+  SacIaResult coarse;              ///< the SAC-IA stage (of the returned alignment)
   IcpResult fine;                  ///< the ICP stage
   std::size_t num_source_coarse = 0, num_target_coarse = 0;  ///< points in the coarse stage
   double seconds_prepare = 0.0;    ///< voxel + normals + FPFH of the source (and target) [s]
-  double seconds_coarse = 0.0;     ///< SAC-IA [s]
-  double seconds_fine = 0.0;       ///< ICP [s]
+  double seconds_coarse = 0.0;     ///< SAC-IA, both searches [s]
+  double seconds_fine = 0.0;       ///< ICP, both searches [s]
 };
 
 /// @brief Prepare the target side once (see LocalizeTarget).

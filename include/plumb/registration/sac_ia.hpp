@@ -45,6 +45,18 @@ struct SacIaSettings {
   std::size_t num_prescore_points = 100;
   double prescore_slack = 0.1;          ///< see num_prescore_points, >= 0
   std::uint64_t seed = 42;              ///< the only source of randomness
+  /// Hypotheses closer than exclude_distance [m] (translation) and exclude_angle [rad] (rotation)
+  /// to one of these poses are skipped: a second search for the best *other* alignment, to tell
+  /// whether the first one is unique (localize_coarse_to_fine's ambiguity test).
+  std::vector<Eigen::Isometry3d> excluded;
+  double exclude_distance = 1.0;        ///< see `excluded` [m]
+  double exclude_angle = 0.35;          ///< see `excluded` [rad] (20 deg)
+  /// Rough position hint: when region_radius > 0, only hypotheses that put the source origin (the
+  /// sensor) within region_radius of region_center (in the target frame, horizontal distance) are
+  /// scored. An operator who knows the room the robot starts in turns a building of look-alike
+  /// rooms into one candidate.
+  Eigen::Vector3d region_center = Eigen::Vector3d::Zero();
+  double region_radius = 0.0;           ///< [m]; 0 = anywhere
 };
 
 /// @brief Result of align_sac_ia().

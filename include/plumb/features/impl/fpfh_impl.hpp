@@ -95,6 +95,7 @@ inline FpfhResult compute_fpfh(const PointCloud& cloud, const FpfhSettings& sett
                                const std::vector<std::size_t>* indices) {
   PLUMB_CHECK(settings.radius > 0.0f && std::isfinite(settings.radius),
               "compute_fpfh: settings.radius = " << settings.radius << " must be > 0 and finite");
+  PLUMB_CHECK(!std::isnan(settings.visible_side_tolerance), "compute_fpfh: settings.visible_side_tolerance is NaN");
   PLUMB_CHECK(!cloud.empty(), "compute_fpfh: the cloud is empty");
   PLUMB_CHECK(cloud.has_normals(),
               "compute_fpfh: the cloud has no normals (compute_normals first)");
@@ -141,6 +142,7 @@ inline FpfhResult compute_fpfh(const PointCloud& cloud, const FpfhSettings& sett
   std::vector<float> found_d2;
   std::vector<std::pair<float, std::uint32_t>> cand;
   const std::size_t cap = settings.max_neighbors;
+  const bool visible_only = settings.visible_side_tolerance >= 0.0f;
 
   // One radius search per point that needs an SPFH; the row keeps its neighbours (self excluded,
   // nearest `cap` kept with self counted, as Open3D's hybrid search).
@@ -157,6 +159,13 @@ inline FpfhResult compute_fpfh(const PointCloud& cloud, const FpfhSettings& sett
         continue;
       }
       if (!usable[q]) continue;
+      if (visible_only) {
+        const Vector3f d = cloud.points[q] - cloud.points[p];
+        if (cloud.normals[p].dot(d) < -settings.visible_side_tolerance ||
+            cloud.normals[q].dot(d) > settings.visible_side_tolerance) {
+          continue;
+        }
+      }
       cand.emplace_back(found_d2[j], static_cast<std::uint32_t>(q));
     }
     // With the point itself counted, `cap` entries leave cap - 1 neighbours.

@@ -22,6 +22,9 @@ inline void check_localize_settings(const LocalizeSettings& s) {
               "localize_coarse_to_fine: settings.voxel_size = " << s.voxel_size << " must be > 0");
   PLUMB_CHECK(std::isfinite(s.fine_voxel_size) && s.fine_voxel_size >= 0.0,
               "localize_coarse_to_fine: settings.fine_voxel_size = " << s.fine_voxel_size << " must be >= 0");
+  PLUMB_CHECK(!std::isnan(s.ambiguity_margin) && std::isfinite(s.ambiguity_distance) && s.ambiguity_distance >= 0.0 &&
+                  std::isfinite(s.ambiguity_angle) && s.ambiguity_angle >= 0.0,
+              "localize_coarse_to_fine: ambiguity_margin must not be NaN, ambiguity_distance / angle must be >= 0");
   PLUMB_CHECK(s.normal_neighbors >= 3,
               "localize_coarse_to_fine: settings.normal_neighbors = " << s.normal_neighbors << " must be >= 3");
   for (double f : {s.normal_radius_factor, s.fpfh_radius_factor, s.huber_factor, s.correspondence_factor})
@@ -35,6 +38,31 @@ inline PointCloud localize_downsample(const PointCloud& cloud, double leaf) {
   VoxelGridSettings vs;
   vs.leaf_size = leaf;
   return voxel_grid(finite, vs).cloud;
+}
+
+/// As localize_downsample(), each of the six signed-axis normal directions voxelised on its own
+/// (points without a finite normal form a seventh group). Without normals: localize_downsample().
+inline PointCloud localize_downsample_by_normal(const PointCloud& cloud, double leaf) {
+  if (leaf <= 0.0 || !cloud.has_normals()) return localize_downsample(cloud, leaf);
+  std::vector<std::vector<std::size_t>> groups(7);
+  for (std::size_t i : cloud.finite_indices()) {
+    const Vector3f& n = cloud.normals[i];
+    std::size_t g = 6;
+    if (n.allFinite() && n.squaredNorm() > 0.0f) {
+      Eigen::Index axis = 0;
+      n.cwiseAbs().maxCoeff(&axis);
+      g = static_cast<std::size_t>(2 * axis) + (n(axis) < 0.0f ? 1 : 0);
+    }
+    groups[g].push_back(i);
+  }
+  std::vector<std::size_t> kept;
+  VoxelGridSettings vs;
+  vs.leaf_size = leaf;
+  for (const std::vector<std::size_t>& g : groups) {
+    if (g.empty()) continue;
+    for (std::size_t i : voxel_grid(cloud.select(g), vs).indices) kept.push_back(g[i]);
+  }
+  return cloud.select(kept);
 }
 
 inline std::size_t count_finite_normals(const PointCloud& c) {
@@ -60,6 +88,7 @@ inline std::vector<FpfhSignature> localize_fpfh(const PointCloud& c, const Local
   FpfhSettings fs;
   fs.radius = static_cast<float>(s.fpfh_radius_factor * s.voxel_size);
   fs.max_neighbors = s.fpfh_max_neighbors;
+  if (s.fpfh_visible_side_factor >= 0.0) fs.visible_side_tolerance = static_cast<float>(s.fpfh_visible_side_factor * s.voxel_size);
   return compute_fpfh(c, fs).features;
 }
 
@@ -71,11 +100,15 @@ inline LocalizeTarget prepare_localize_target(const PointCloud& target, const Lo
   const auto t0 = std::chrono::steady_clock::now();
   LocalizeTarget out;
   const Vector3f origin = Vector3f::Zero();
-  out.coarse = detail::localize_downsample(target, settings.voxel_size);
+  auto downsample = [&](double leaf) {
+    return settings.split_target_by_normal ? detail::localize_downsample_by_normal(target, leaf)
+                                           : detail::localize_downsample(target, leaf);
+  };
+  out.coarse = downsample(settings.voxel_size);
   detail::localize_normals(out.coarse, settings, settings.voxel_size, settings.use_target_normals, origin);
   out.features = detail::localize_fpfh(out.coarse, settings);
   if (out.coarse.size() >= 3) out.coarse_tree = std::make_unique<KdTree3f>(out.coarse.points);
-  out.fine = detail::localize_downsample(target, settings.fine_voxel_size);
+  out.fine = downsample(settings.fine_voxel_size);
   if (settings.icp.method == IcpMethod::kPointToPlane || out.fine.has_normals()) {
     detail::localize_normals(out.fine, settings, settings.fine_voxel_size, settings.use_target_normals, origin);
   }
@@ -102,42 +135,68 @@ inline LocalizeResult localize_coarse_to_fine(const PointCloud& source, const Lo
     return out;
   }
 
-  t0 = std::chrono::steady_clock::now();
   SacIaSettings ss = settings.sac_ia;
   ss.huber_threshold = settings.huber_factor * settings.voxel_size;
   ss.max_correspondence_distance = std::max(ss.huber_threshold, settings.correspondence_factor * settings.voxel_size);
-  out.coarse = align_sac_ia(coarse, features, target.coarse, target.features, *target.coarse_tree, ss);
-  out.seconds_coarse = detail::seconds_since(t0);
-  if (out.coarse.status == Status::kInsufficientData) {
-    out.status = out.coarse.status;
-    return out;
-  }
-
-  t0 = std::chrono::steady_clock::now();
   PointCloud fine = detail::localize_downsample(source, settings.fine_voxel_size);
   fine.normals.clear();
   if (target.fine.has_normals() && fine.size() >= 3) {  // for the normal-angle rejection
     detail::localize_normals(fine, settings, settings.fine_voxel_size, false, settings.source_viewpoint);
   }
-  out.fine = align_icp(fine, target.fine, *target.fine_tree, out.coarse.T_target_source, settings.icp);
-  if (settings.polish && out.fine.status != Status::kInsufficientData) {
-    IcpSettings ps = settings.icp;
-    ps.max_correspondence_distance = ps.min_correspondence_distance;
-    ps.max_rounds = 1;
-    ps.min_overlap = 0.0;
-    const IcpResult polished = align_icp(fine, target.fine, *target.fine_tree, out.fine.T_target_source, ps);
-    if (polished.status != Status::kInsufficientData && polished.status != Status::kDegenerate) {
-      out.fine.T_target_source = polished.T_target_source;
-      out.fine.iterations += polished.iterations;
-      out.fine.num_inliers = polished.num_inliers;
-      out.fine.rmse = polished.rmse;
-      out.fine.degeneracy = polished.degeneracy;
-      out.fine.overlap = overlap_ratio(fine, *target.fine_tree, polished.T_target_source, ps.overlap_distance).overlap;
+  // SAC-IA, then the gated ICP (and its polish) from its best hypothesis.
+  auto attempt = [&](const SacIaSettings& sac, SacIaResult& coarse_out, IcpResult& fine_out) {
+    auto t = std::chrono::steady_clock::now();
+    coarse_out = align_sac_ia(coarse, features, target.coarse, target.features, *target.coarse_tree, sac);
+    out.seconds_coarse += detail::seconds_since(t);
+    if (coarse_out.status == Status::kInsufficientData) return false;
+    t = std::chrono::steady_clock::now();
+    fine_out = align_icp(fine, target.fine, *target.fine_tree, coarse_out.T_target_source, settings.icp);
+    if (settings.polish && fine_out.status != Status::kInsufficientData) {
+      IcpSettings ps = settings.icp;
+      ps.max_correspondence_distance = ps.min_correspondence_distance;
+      ps.max_rounds = 1;
+      ps.min_overlap = 0.0;
+      const IcpResult polished = align_icp(fine, target.fine, *target.fine_tree, fine_out.T_target_source, ps);
+      if (polished.status != Status::kInsufficientData && polished.status != Status::kDegenerate) {
+        fine_out.T_target_source = polished.T_target_source;
+        fine_out.iterations += polished.iterations;
+        fine_out.num_inliers = polished.num_inliers;
+        fine_out.rmse = polished.rmse;
+        fine_out.degeneracy = polished.degeneracy;
+        fine_out.overlap =
+            overlap_ratio(fine, *target.fine_tree, polished.T_target_source, ps.overlap_distance).overlap;
+      }
+    }
+    out.seconds_fine += detail::seconds_since(t);
+    return true;
+  };
+  if (!attempt(ss, out.coarse, out.fine)) {
+    out.status = out.coarse.status;
+    return out;
+  }
+  // Ambiguity: the best alignment at least ambiguity_distance / ambiguity_angle away from the first
+  // one. A building repeats itself (rooms alike, mirrored floors, long corridors): when the other
+  // place explains the frame about as well, the frame alone cannot tell them apart.
+  if (settings.ambiguity_margin >= 0.0 && out.fine.status == Status::kOk) {
+    SacIaSettings other = ss;
+    other.excluded = {out.fine.T_target_source};
+    other.exclude_distance = settings.ambiguity_distance;
+    other.exclude_angle = settings.ambiguity_angle;
+    SacIaResult coarse2;
+    IcpResult fine2;
+    if (attempt(other, coarse2, fine2) && fine2.status != Status::kInsufficientData &&
+        !detail::near_any(fine2.T_target_source, other.excluded, settings.ambiguity_distance, settings.ambiguity_angle)) {
+      if (fine2.status == Status::kOk && fine2.overlap > out.fine.overlap) {
+        std::swap(out.fine, fine2);
+        std::swap(out.coarse, coarse2);
+      }
+      out.second_overlap = fine2.overlap;
+      out.T_target_source_second = fine2.T_target_source;
+      out.ambiguous = fine2.overlap >= (1.0 - settings.ambiguity_margin) * out.fine.overlap;
     }
   }
-  out.seconds_fine = detail::seconds_since(t0);
   out.T_target_source = out.fine.T_target_source;
-  out.status = out.fine.status;
+  out.status = out.ambiguous ? Status::kRejected : out.fine.status;
   out.converged = out.fine.converged;
   out.iterations = out.fine.iterations;
   out.num_inliers = out.fine.num_inliers;

@@ -26,7 +26,22 @@ inline bool fpfh_valid(const FpfhSignature& f) {
   return any;
 }
 
+/// True when T is within `distance` (translation) and `angle` (rotation) of one of `poses`.
+inline bool near_any(const Eigen::Isometry3d& T, const std::vector<Eigen::Isometry3d>& poses, double distance,
+                     double angle) {
+  for (const Eigen::Isometry3d& E : poses) {
+    if ((T.translation() - E.translation()).norm() >= distance) continue;
+    if (Eigen::AngleAxisd(E.linear().transpose() * T.linear()).angle() < angle) return true;
+  }
+  return false;
+}
+
 inline void check_sac_ia_settings(const SacIaSettings& s) {
+  PLUMB_CHECK(std::isfinite(s.exclude_distance) && s.exclude_distance >= 0.0 && std::isfinite(s.exclude_angle) &&
+                  s.exclude_angle >= 0.0,
+              "align_sac_ia: settings.exclude_distance / exclude_angle must be finite and >= 0");
+  PLUMB_CHECK(std::isfinite(s.region_radius) && s.region_radius >= 0.0 && s.region_center.allFinite(),
+              "align_sac_ia: settings.region_radius must be >= 0 and region_center finite");
   PLUMB_CHECK(s.num_samples >= 3, "align_sac_ia: settings.num_samples = " << s.num_samples << " must be >= 3");
   PLUMB_CHECK(std::isfinite(s.min_sample_distance) && s.min_sample_distance >= 0.0,
               "align_sac_ia: settings.min_sample_distance = " << s.min_sample_distance << " must be >= 0");
@@ -249,6 +264,14 @@ inline SacIaResult align_sac_ia(const PointCloud& source, const std::vector<Fpfh
     bool close = true;
     for (std::size_t a = 0; a < s && close; ++a) close = (h.T_target_source * P[a] - Q[a]).squaredNorm() <= m1_sq;
     if (!close) continue;
+    if (settings.region_radius > 0.0 &&
+        (h.T_target_source.translation() - settings.region_center).head<2>().norm() > settings.region_radius) {
+      continue;
+    }
+    if (!settings.excluded.empty() && detail::near_any(h.T_target_source, settings.excluded, settings.exclude_distance,
+                                                       settings.exclude_angle)) {
+      continue;
+    }
     ++out.num_scored;
     const Eigen::Matrix3f R = h.T_target_source.linear().cast<float>();
     const Eigen::Vector3f t = h.T_target_source.translation().cast<float>();

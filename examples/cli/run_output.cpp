@@ -1,0 +1,133 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "run_output.hpp"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "plumb/bim/sample.hpp"
+#include "plumb/core/error.hpp"
+#include "plumb/io/svg.hpp"
+#include "plumb/io/trajectory.hpp"
+
+namespace plumb::cli {
+namespace {
+
+nlohmann::json pose_json(const Eigen::Isometry3d& T) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (int r = 0; r < 4; ++r) rows.push_back({T(r, 0), T(r, 1), T(r, 2), T(r, 3)});
+  return rows;
+}
+
+double percent(double error, double distance) { return distance > 0 ? 100.0 * error / distance : 0.0; }
+
+}  // namespace
+
+nlohmann::json run_report_json(const RunReport& r) {
+  nlohmann::json j;
+  j["frames"] = r.frames.size();
+  j["localized"] = r.localized;
+  j["localization_status"] = to_string(r.localization_status);
+  if (r.localized) {
+    j["localization"] = {{"overlap", r.localization.overlap}, {"rmse", r.localization.rmse},
+                         {"ambiguous", r.localization.ambiguous}, {"second_overlap", r.localization.second_overlap}};
+  }
+  j["T_bim_base0"] = pose_json(r.T_bim_base0);
+  j["bim_points"] = r.bim_points;
+  j["anchors"] = {{"attempted", r.anchors_attempted}, {"accepted", r.anchors_accepted}, {"rejected", r.anchors_rejected}};
+  j["fallbacks"] = r.fallbacks;
+  j["seconds_localize"] = r.seconds_localize;
+  j["seconds_frames"] = r.seconds_frames;
+  j["frames_per_second"] = r.frames_per_second;
+  if (r.has_ground_truth) {
+    j["initial_error"] = {{"xy", r.initial_error_xy}, {"yaw_deg", r.initial_error_yaw_deg}};
+    j["path_length"] = r.path_length;
+    nlohmann::json table = nlohmann::json::array();
+    for (const ObservationRow& row : r.table) {
+      table.push_back({{"point", row.name}, {"frame", row.frame}, {"distance", row.distance},
+                       {"wheel", {{"error", row.error_wheel}, {"percent", percent(row.error_wheel, row.distance)}}},
+                       {"lidar", {{"error", row.error_lidar}, {"percent", percent(row.error_lidar, row.distance)}}},
+                       {"bim", {{"error", row.error_bim}, {"percent", percent(row.error_bim, row.distance)}}}});
+    }
+    j["table"] = table;
+    j["ape_rmse_xy"] = {{"wheel", r.ape_rmse_wheel}, {"lidar", r.ape_rmse_lidar}, {"bim", r.ape_rmse_bim}};
+    j["max_error_xy"] = {{"wheel", r.max_error_wheel}, {"lidar", r.max_error_lidar}, {"bim", r.max_error_bim}};
+  }
+  return j;
+}
+
+void write_run_outputs(const RunReport& r, const nlohmann::json& report, const bim::BimMesh& mesh,
+                       const io::FrameDumpReader& dump, const std::string& out_dir, const std::string& title,
+                       const std::string& model_name) {
+  std::filesystem::create_directories(out_dir);
+  {
+    std::ofstream out(out_dir + "/report.json");
+    out << report.dump(2) << '\n';
+    PLUMB_CHECK(out.good(), out_dir << "/report.json: write error");
+  }
+  if (r.localization_status != Status::kOk) {
+    if (r.localization.ambiguous) {
+      PLUMB_THROW(dump.dir() << ": the first frame fits two places of " << model_name << " about as well (overlap "
+                             << r.localization.overlap << " and " << r.localization.second_overlap
+                             << "); give --start-hint X Y (the room the robot starts in) or --gt-start");
+    }
+    PLUMB_THROW(dump.dir() << ": the first frame could not be localized in " << model_name << " ("
+                           << to_string(r.localization_status) << ", overlap " << r.localization.overlap
+                           << "); give --start-hint X Y, --gt-start, or check that the dump was recorded in this building");
+  }
+  io::write_tum(r.wheel, out_dir + "/wheel.tum");
+  io::write_tum(r.lidar, out_dir + "/lidar.tum");
+  io::write_tum(r.bim, out_dir + "/bim.tum");
+
+  io::SvgPlot plot;
+  plot.title = title;
+  if (!mesh.storeys.empty()) {
+    const double z = r.T_bim_base0.translation().z() + 1.0;
+    const bim::FloorPlan fp = bim::slice_floor_plan(mesh, z);
+    for (std::size_t i = 0; i < fp.segment_start.size(); ++i) plot.floor_plan.push_back({fp.segment_start[i], fp.segment_end[i]});
+  }
+  if (r.has_ground_truth) plot.add_trajectory(dump.ground_truth(), "ground truth", "#000000", true);
+  plot.add_trajectory(r.wheel, "wheel odometry", "#d62728");
+  plot.add_trajectory(r.lidar, "LiDAR (no BIM)", "#ff7f0e");
+  plot.add_trajectory(r.bim, "BIM-corrected", "#2ca02c");
+  io::write_svg(plot, out_dir + "/trajectory.svg");
+}
+
+void print_run_summary(const RunReport& r) {
+  std::printf("%zu frames, %.1f frames/s; anchors %zu accepted / %zu rejected of %zu attempted; %zu fallbacks\n",
+              r.frames.size(), r.frames_per_second, r.anchors_accepted, r.anchors_rejected, r.anchors_attempted,
+              r.fallbacks);
+  if (r.localized) {
+    std::printf("initial localization: %s in %.2f s (overlap %.2f, rmse %.1f mm)\n", to_string(r.localization_status),
+                r.seconds_localize, r.localization.overlap, r.localization.rmse * 1e3);
+  }
+  if (!r.has_ground_truth) return;
+  std::printf("initial pose error: %.1f mm, %.3f deg\n", r.initial_error_xy * 1e3, r.initial_error_yaw_deg);
+  std::printf("%-6s %10s %18s %18s %18s\n", "point", "path [m]", "wheel", "LiDAR", "BIM-corrected");
+  for (const ObservationRow& row : r.table) {
+    auto cell = [&](double e) {
+      char buf[64];
+      std::snprintf(buf, sizeof(buf), "%.3f m %6.3f %%", e, percent(e, row.distance));
+      return std::string(buf);
+    };
+    std::printf("%-6s %10.2f %18s %18s %18s\n", row.name.c_str(), row.distance, cell(row.error_wheel).c_str(),
+                cell(row.error_lidar).c_str(), cell(row.error_bim).c_str());
+  }
+  std::printf("max error (xy):  wheel %.3f m, LiDAR %.3f m, BIM-corrected %.3f m\n", r.max_error_wheel,
+              r.max_error_lidar, r.max_error_bim);
+  std::printf("APE rmse (xy):   wheel %.3f m, LiDAR %.3f m, BIM-corrected %.3f m\n", r.ape_rmse_wheel,
+              r.ape_rmse_lidar, r.ape_rmse_bim);
+}
+
+std::function<void(std::size_t, std::size_t)> terminal_progress(const std::string& what) {
+  if (isatty(fileno(stderr)) == 0) return {};
+  return [what](std::size_t done, std::size_t total) {
+    if (done % 10 == 0 || done == total) std::fprintf(stderr, "\r  %s: frame %zu / %zu", what.c_str(), done, total);
+    if (done == total) std::fprintf(stderr, "\n");
+    std::fflush(stderr);
+  };
+}
+
+}  // namespace plumb::cli

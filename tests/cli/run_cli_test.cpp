@@ -1,0 +1,123 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// `plumb run` and `plumb demo` as a user runs them: a short simulated run in the demo office from
+// the surveyed start, the three trajectories against the exact ground truth; a dump without wheel
+// odometry and bad options fail with a clear message.
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "cli_runner.hpp"
+#include "plumb/io/frame_dump.hpp"
+#include "plumb/io/trajectory.hpp"
+#include "test_data.hpp"
+
+namespace plumb {
+namespace {
+
+using test::CliTest;
+using test::run_cli;
+using Json = nlohmann::json;
+
+std::string demo_model() { return std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc"; }
+
+/// A short run in the demo office (16-line LiDAR to keep it quick), one per test process.
+std::string simulate_demo_dump(const std::string& name, double length) {
+  const std::string dir = test::temp_path(name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  const test::RunResult r = run_cli("simulate '" + demo_model() + "' -o '" + dir + "' --lidar vlp16 --length " +
+                                    std::to_string(length) + " --seed 4");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return dir;
+}
+
+std::size_t count_lines(const std::string& path) {
+  std::ifstream in(path);
+  std::size_t n = 0;
+  for (std::string line; std::getline(in, line);) n += (!line.empty() && line[0] != '#') ? 1 : 0;
+  return n;
+}
+
+TEST_F(CliTest, RunWritesTheThreeTrajectoriesAndTableTwo) {
+  const std::string dump_dir = simulate_demo_dump("cli_run_dump", 5.0);
+  const std::string out = dump_dir + "_out";
+  const test::RunResult r =
+      run_cli("run '" + dump_dir + "' --bim '" + demo_model() + "' -o '" + out + "' --gt-start --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Json j = Json::parse(r.out);
+  EXPECT_EQ(j.at("localization_status"), "ok");
+  EXPECT_FALSE(j.at("localized").get<bool>());
+  EXPECT_LT(j.at("initial_error").at("xy").get<double>(), 1e-9);
+  const io::FrameDumpReader dump(dump_dir);
+  EXPECT_EQ(j.at("frames").get<std::size_t>(), dump.num_frames());
+  ASSERT_EQ(j.at("table").size(), 3u);
+  const Json& end = j.at("table").at(2);
+  EXPECT_EQ(end.at("point"), "end");
+  EXPECT_GT(end.at("distance").get<double>(), 4.0);
+  EXPECT_LT(end.at("bim").at("error").get<double>(), 0.05);
+  EXPECT_LT(j.at("max_error_xy").at("bim").get<double>(), 0.08);
+  for (const char* name : {"wheel.tum", "lidar.tum", "bim.tum"}) {
+    EXPECT_EQ(count_lines(out + "/" + name), dump.num_frames()) << name;
+  }
+  // The corrected trajectory file matches the reported end error against gt.tum.
+  const Trajectory bim = io::read_tum(out + "/bim.tum");
+  const Trajectory gt = dump.ground_truth();
+  ASSERT_EQ(bim.size(), gt.size());
+  EXPECT_NEAR((bim.poses.back().translation() - gt.poses.back().translation()).head<2>().norm(),
+              end.at("bim").at("error").get<double>(), 1e-4);
+  const std::string svg = test::read_text(out + "/trajectory.svg");
+  EXPECT_NE(svg.find("BIM-corrected"), std::string::npos);
+  EXPECT_NE(svg.find("ground truth"), std::string::npos);
+  EXPECT_EQ(Json::parse(test::read_text(out + "/report.json")), j);
+  std::filesystem::remove_all(dump_dir);
+  std::filesystem::remove_all(out);
+}
+
+TEST_F(CliTest, RunWithoutWheelOdometryOrWithBadOptionsFailsClearly) {
+  const std::string dump_dir = simulate_demo_dump("cli_run_bad_dump", 1.0);
+  const std::string out = dump_dir + "_out";
+  test::RunResult r;
+  r = run_cli("run '" + dump_dir + "' --bim '" + demo_model() + "' -o '" + out + "' --start-hint 1");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("start-hint"), std::string::npos) << r.err;
+  r = run_cli("run '" + dump_dir + "' --bim '" + demo_model() + "' -o '" + out + "' --start-hint 1 2 --start-hint-radius -1");
+  EXPECT_NE(r.exit_code, 0);
+  // No odom.csv: the front end has no prior; the message names the file.
+  std::filesystem::remove(dump_dir + "/odom.csv");
+  r = run_cli("run '" + dump_dir + "' --bim '" + demo_model() + "' -o '" + out + "'");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("odom.csv"), std::string::npos) << r.err;
+  // Options a user gets wrong.
+  r = run_cli("run '" + dump_dir + "' -o '" + out + "'");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("--bim"), std::string::npos) << r.err;
+  r = run_cli("run '" + dump_dir + "_missing' --bim '" + demo_model() + "' -o '" + out + "'");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("_missing"), std::string::npos) << r.err;
+  std::filesystem::remove_all(dump_dir);
+  std::filesystem::remove_all(out);
+}
+
+TEST_F(CliTest, DemoRunsTheWholeJobAndReportsTableTwo) {
+  const std::string dir = test::temp_path("cli_demo_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  const test::RunResult r = run_cli("demo -o '" + dir + "' --length 6 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Json j = Json::parse(r.out);
+  EXPECT_EQ(j.at("localization_status"), "ok");
+  EXPECT_NEAR(j.at("simulation").at("path_length").get<double>(), 6.0, 0.5);
+  const Json& end = j.at("table").at(2);
+  EXPECT_LT(end.at("bim").at("error").get<double>(), 0.05);
+  EXPECT_TRUE(std::filesystem::exists(dir + "/demo_office.ifc"));
+  EXPECT_TRUE(std::filesystem::exists(dir + "/dump/gt.tum"));
+  EXPECT_TRUE(std::filesystem::exists(dir + "/run/trajectory.svg"));
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace plumb
