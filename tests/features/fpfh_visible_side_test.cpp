@@ -47,6 +47,15 @@ ThinWallScene make_scene(float thickness, bool next_room) {
   return s;
 }
 
+/// Every neighbour within 0.6 m; visible side only when tolerance >= 0.
+FpfhSettings thin_wall_settings(float tolerance) {
+  FpfhSettings s;
+  s.radius = 0.6f;
+  s.max_neighbors = 0;
+  s.visible_side_tolerance = tolerance;
+  return s;
+}
+
 /// Mean and largest L1 distance between the descriptors of the front points in `model` and `scan`.
 std::pair<double, double> front_distance(const FpfhResult& model, const FpfhResult& scan) {
   double sum = 0.0, largest = 0.0;
@@ -63,11 +72,8 @@ TEST(FpfhVisibleSideTest, ThinWallBackFaceIsLeftOutExactly) {
   // Only the back face behind the wall: every front point's neighbourhood, and its neighbours',
   // is exactly what the sensor sees.
   const ThinWallScene scene = make_scene(0.12f, false);
-  FpfhSettings plain;
-  plain.radius = 0.6f;
-  plain.max_neighbors = 0;
-  FpfhSettings visible = plain;
-  visible.visible_side_tolerance = 0.05f;
+  const FpfhSettings plain = thin_wall_settings(-1.0f);
+  const FpfhSettings visible = thin_wall_settings(0.05f);
   const FpfhResult scan = compute_fpfh(scene.front, plain);  // nothing hidden in it to drop
   EXPECT_LT(front_distance(compute_fpfh(scene.all, visible), scan).second, 1e-3);
   // Plain FPFH of the model differs: the back face changes the front descriptors.
@@ -78,11 +84,8 @@ TEST(FpfhVisibleSideTest, RoomBehindTheWallMostlyLeftOut) {
   // With the next room's floor coplanar with this one, floor points near the wall still pair with
   // it (no occlusion test), so the descriptors are close, not equal.
   const ThinWallScene scene = make_scene(0.12f, true);
-  FpfhSettings plain;
-  plain.radius = 0.6f;
-  plain.max_neighbors = 0;
-  FpfhSettings visible = plain;
-  visible.visible_side_tolerance = 0.05f;
+  const FpfhSettings plain = thin_wall_settings(-1.0f);
+  const FpfhSettings visible = thin_wall_settings(0.05f);
   const FpfhResult scan = compute_fpfh(scene.front, plain);
   const double d_visible = front_distance(compute_fpfh(scene.all, visible), scan).first;
   const double d_plain = front_distance(compute_fpfh(scene.all, plain), scan).first;

@@ -125,6 +125,13 @@ TEST(LocalizeAmbiguityTest, TwoCopiesAreAmbiguousUnlessHinted) {
   EXPECT_FALSE(hinted.ambiguous);
   EXPECT_EQ(hinted.status, Status::kOk);
   EXPECT_LT(pose_distance(hinted.T_target_source, c.T_second), 0.01);
+  // Bad ambiguity settings are an error, not a silent test.
+  LocalizeSettings bad = s;
+  bad.ambiguity_margin = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(localize_coarse_to_fine(source, target, bad), Error);
+  bad = s;
+  bad.ambiguity_distance = -1.0;
+  EXPECT_THROW(localize_coarse_to_fine(source, target, bad), Error);
 }
 
 TEST(LocalizeTargetTest, SplitByNormalKeepsBothFacesOfAThinWall) {
