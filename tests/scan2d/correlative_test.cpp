@@ -1,0 +1,162 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Global correlative scan matching: the branch-and-bound result against a brute-force evaluation of
+// every heading and translation, on a synthetic floor plan.
+#include "plumb/scan2d/correlative.hpp"
+
+#include <cmath>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "plumb/core/error.hpp"
+#include "plumb/core/rng.hpp"
+
+namespace {
+
+using plumb::CorrelativeMap2D;
+using plumb::CorrelativeMapSettings;
+using plumb::CorrelativeSearchSettings;
+using plumb::Pose2;
+using plumb::Vector2d;
+
+/// Walls of an irregular two-room plan (8 x 5 m, a partition with a door gap), every 2 cm, with
+/// the normals of the faces looking into the rooms.
+void floor_plan(std::vector<Vector2d>& pts, std::vector<Vector2d>& normals) {
+  auto wall = [&](Vector2d a, Vector2d b, Vector2d n) {
+    const int k = static_cast<int>((b - a).norm() / 0.02);
+    for (int i = 0; i <= k; ++i) {
+      pts.push_back(a + (b - a) * i / k);
+      normals.push_back(n);
+    }
+  };
+  wall({0, 0}, {8, 0}, {0, 1});
+  wall({8, 0}, {8, 5}, {-1, 0});
+  wall({8, 5}, {0, 5}, {0, -1});
+  wall({0, 5}, {0, 0}, {1, 0});
+  wall({5, 0}, {5, 2}, {-1, 0});
+  wall({5.1, 0}, {5.1, 2}, {1, 0});
+  wall({5, 3}, {5, 5}, {-1, 0});
+  wall({5.1, 3}, {5.1, 5}, {1, 0});
+  wall({1, 3.5}, {2.5, 3.5}, {0, -1});  // a cupboard
+}
+
+/// What a robot at `pose` in the left room sees: the wall points of the left room within 6 m,
+/// in the robot frame, with noise.
+std::vector<Vector2d> scan_from(const std::vector<Vector2d>& pts, const Pose2& pose, plumb::Rng& rng) {
+  std::vector<Vector2d> scan;
+  const Pose2 inv = pose.ominus();
+  for (std::size_t i = 0; i < pts.size(); i += 6) {
+    if (pts[i].x() > 5.05 || (pts[i] - Vector2d(pose.x, pose.y)).norm() > 6.0) continue;
+    scan.push_back(inv * pts[i] + Vector2d(rng.normal(0.0, 0.01), rng.normal(0.0, 0.01)));
+  }
+  return scan;
+}
+
+TEST(CorrelativeMatchTest, BranchAndBoundEqualsBruteForce) {
+  std::vector<Vector2d> pts, normals;
+  floor_plan(pts, normals);
+  CorrelativeMapSettings ms;
+  ms.resolution = 0.1;
+  ms.levels = 5;
+  auto inside = [](const Vector2d& t) { return t.x() > 0.2 && t.x() < 7.8 && t.y() > 0.2 && t.y() < 4.8; };
+  const CorrelativeMap2D map(pts, ms, inside);
+  plumb::Rng rng(3);
+  const Pose2 truth{2.33, 1.71, 0.6};
+  const std::vector<Vector2d> scan = scan_from(pts, truth, rng);
+  CorrelativeSearchSettings ss;
+  ss.angular_step = 2.0 * M_PI / 90.0;  // coarse, so that brute force stays cheap
+  ss.max_points = 100000;
+  const plumb::CorrelativeResult r = map.match(scan, ss);
+  ASSERT_EQ(r.status, plumb::Status::kOk);
+  EXPECT_EQ(r.num_angles, 90u);
+
+  // Brute force over the same headings and translations (cell corners).
+  double best = -1.0, second = -1.0;
+  Pose2 best_pose;
+  std::vector<std::pair<double, Pose2>> all;
+  for (int a = 0; a < 90; ++a) {
+    const double theta = -M_PI + 2.0 * M_PI * a / 90.0;
+    for (int jy = 0; jy < map.height(); ++jy) {
+      for (int jx = 0; jx < map.width(); ++jx) {
+        const Vector2d t = map.origin() + Vector2d(jx, jy) * ms.resolution;
+        if (!inside(t)) continue;
+        const Pose2 p{t.x(), t.y(), theta};
+        const double s = map.score(scan, p);
+        all.emplace_back(s, p);
+        if (s > best) {
+          best = s;
+          best_pose = p;
+        }
+      }
+    }
+  }
+  for (const auto& [s, p] : all) {
+    const bool near = (Vector2d(p.x, p.y) - Vector2d(best_pose.x, best_pose.y)).norm() < ss.second_distance &&
+                      std::abs(plumb::wrap_angle(p.theta - best_pose.theta)) < ss.second_angle;
+    if (!near) second = std::max(second, s);
+  }
+  EXPECT_NEAR(r.score, best, 1e-9);
+  EXPECT_NEAR(r.second_score, second, 1e-9);
+  EXPECT_LT(r.nodes_scored, all.size() / 5);  // the bound prunes most of the brute force
+  // And the best pose is the truth, to the grid's steps.
+  EXPECT_LT((Vector2d(r.pose.x, r.pose.y) - Vector2d(truth.x, truth.y)).norm(), 0.15);
+  EXPECT_LT(std::abs(plumb::wrap_angle(r.pose.theta - truth.theta)), ss.angular_step);
+}
+
+TEST(CorrelativeMatchTest, NormalsKeepAWallsFarFaceFromExplainingItsNearFace) {
+  // A scan of the partition's left face only, seen from the left room: without normals the right
+  // face (10 cm away) explains it as well; with normals only the left face does.
+  std::vector<Vector2d> pts, normals;
+  floor_plan(pts, normals);
+  CorrelativeMapSettings ms;
+  ms.resolution = 0.02;
+  ms.sigma = 0.02;
+  ms.levels = 4;
+  const CorrelativeMap2D with(pts, ms, {}, normals);
+  const Pose2 pose{3.0, 1.0, 0.0};
+  std::vector<Vector2d> scan, scan_normals;
+  for (double y = 0.2; y < 1.8; y += 0.02) {
+    scan.push_back(pose.ominus() * Vector2d(5.0, y));
+    scan_normals.emplace_back(-1.0, 0.0);
+  }
+  const Pose2 shifted{3.1, 1.0, 0.0};  // puts the scan on the far face
+  EXPECT_GT(with.score(scan, pose, scan_normals), 0.9);
+  EXPECT_LT(with.score(scan, shifted, scan_normals), 0.1);
+  EXPECT_GT(with.score(scan, shifted), 0.9);  // without scan normals: any face counts
+}
+
+TEST(CorrelativeMatchTest, HintRegionAndBadInput) {
+  std::vector<Vector2d> pts, normals;
+  floor_plan(pts, normals);
+  CorrelativeMapSettings ms;
+  ms.resolution = 0.1;
+  const CorrelativeMap2D map(pts, ms);
+  plumb::Rng rng(5);
+  const Pose2 truth{6.5, 2.5, -1.0};
+  std::vector<Vector2d> scan;
+  for (const Vector2d& p : pts)
+    if (p.x() > 5.0) scan.push_back(truth.ominus() * p);
+  CorrelativeSearchSettings ss;
+  ss.region_center = Vector2d(6.0, 2.0);
+  ss.region_radius = 1.5;
+  const plumb::CorrelativeResult r = map.match(scan, ss);
+  ASSERT_EQ(r.status, plumb::Status::kOk);
+  EXPECT_LT((Vector2d(r.pose.x, r.pose.y) - Vector2d(truth.x, truth.y)).norm(), 0.15);
+  // A region off the map: nothing found.
+  ss.region_center = Vector2d(100.0, 100.0);
+  EXPECT_EQ(map.match(scan, ss).status, plumb::Status::kRejected);
+  // Too few points, NaN points: status; bad settings: plumb::Error.
+  EXPECT_EQ(map.match({Vector2d(1, 1)}).status, plumb::Status::kInsufficientData);
+  std::vector<Vector2d> nan_scan(50, Vector2d::Constant(std::nan("")));
+  EXPECT_EQ(map.match(nan_scan).status, plumb::Status::kInsufficientData);
+  CorrelativeSearchSettings bad;
+  bad.min_score = 2.0;
+  EXPECT_THROW(map.match(scan, bad), plumb::Error);
+  EXPECT_THROW(map.match(scan, {}, std::vector<Vector2d>(3)), plumb::Error);
+  CorrelativeMapSettings huge;
+  huge.resolution = 0.001;  // a plan in millimetres read as metres
+  EXPECT_THROW(CorrelativeMap2D({Vector2d(0, 0), Vector2d(8000, 5000)}, huge), plumb::Error);
+  EXPECT_THROW(CorrelativeMap2D({}), plumb::Error);
+}
+
+}  // namespace
