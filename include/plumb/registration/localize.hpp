@@ -129,9 +129,24 @@ struct LocalizeResult {
   double seconds_fine = 0.0;       ///< ICP, both searches [s]
 };
 
+/// @brief Which parts of a LocalizeTarget prepare_localize_target() builds.
+enum class LocalizeStages {
+  kCoarseAndFine,  ///< everything localize_coarse_to_fine() needs
+  kFineOnly,       ///< only `fine` and `fine_tree`, for refine_localization() (no FPFH: much cheaper)
+};
+
 /// @brief Prepare the target side once (see LocalizeTarget).
 /// @throws plumb::Error for bad settings or inconsistent cloud fields
-LocalizeTarget prepare_localize_target(const PointCloud& target, const LocalizeSettings& settings = {});
+LocalizeTarget prepare_localize_target(const PointCloud& target, const LocalizeSettings& settings = {},
+                                       LocalizeStages stages = LocalizeStages::kCoarseAndFine);
+
+/// @brief The fine stage of localize_coarse_to_fine() alone, from an initial pose found another
+///        way (BimLocalizer's floor-plan search, a user's guess): the source at fine_voxel_size,
+///        the overlap-gated ICP (settings.icp) and the polish round.
+/// @return the ICP result; kInsufficientData when the target has no fine cloud
+/// @throws plumb::Error for bad settings, inconsistent fields or a non-finite initial pose
+IcpResult refine_localization(const PointCloud& source, const LocalizeTarget& target,
+                              const Eigen::Isometry3d& T_target_source, const LocalizeSettings& settings = {});
 
 /// @brief SEEDS A1 in one call against a prepared target; `source` is e.g. the first LiDAR frame.
 /// @note Deterministic for a given settings.sac_ia.seed. Empty / tiny / collinear sources return

@@ -92,9 +92,42 @@ inline std::vector<FpfhSignature> localize_fpfh(const PointCloud& c, const Local
   return compute_fpfh(c, fs).features;
 }
 
+/// The source at the fine stage's voxel, with normals when the target has them (for the
+/// normal-angle rejection).
+inline PointCloud localize_fine_source(const PointCloud& source, const PointCloud& target_fine,
+                                       const LocalizeSettings& s) {
+  PointCloud fine = localize_downsample(source, s.fine_voxel_size);
+  fine.normals.clear();
+  if (target_fine.has_normals() && fine.size() >= 3) localize_normals(fine, s, s.fine_voxel_size, false, s.source_viewpoint);
+  return fine;
+}
+
+/// The gated ICP from T_init, then (settings.polish) one round at the smallest distance.
+inline IcpResult localize_fine_stage(const PointCloud& fine, const LocalizeTarget& target,
+                                     const Eigen::Isometry3d& T_init, const LocalizeSettings& settings) {
+  IcpResult r = align_icp(fine, target.fine, *target.fine_tree, T_init, settings.icp);
+  if (settings.polish && r.status != Status::kInsufficientData) {
+    IcpSettings ps = settings.icp;
+    ps.max_correspondence_distance = ps.min_correspondence_distance;
+    ps.max_rounds = 1;
+    ps.min_overlap = 0.0;
+    const IcpResult polished = align_icp(fine, target.fine, *target.fine_tree, r.T_target_source, ps);
+    if (polished.status != Status::kInsufficientData && polished.status != Status::kDegenerate) {
+      r.T_target_source = polished.T_target_source;
+      r.iterations += polished.iterations;
+      r.num_inliers = polished.num_inliers;
+      r.rmse = polished.rmse;
+      r.degeneracy = polished.degeneracy;
+      r.overlap = overlap_ratio(fine, *target.fine_tree, polished.T_target_source, ps.overlap_distance).overlap;
+    }
+  }
+  return r;
+}
+
 }  // namespace detail
 
-inline LocalizeTarget prepare_localize_target(const PointCloud& target, const LocalizeSettings& settings) {
+inline LocalizeTarget prepare_localize_target(const PointCloud& target, const LocalizeSettings& settings,
+                                              LocalizeStages stages) {
   detail::check_localize_settings(settings);
   target.check_consistent("localize_coarse_to_fine: target");
   const auto t0 = std::chrono::steady_clock::now();
@@ -104,10 +137,12 @@ inline LocalizeTarget prepare_localize_target(const PointCloud& target, const Lo
     return settings.split_target_by_normal ? detail::localize_downsample_by_normal(target, leaf)
                                            : detail::localize_downsample(target, leaf);
   };
-  out.coarse = downsample(settings.voxel_size);
-  detail::localize_normals(out.coarse, settings, settings.voxel_size, settings.use_target_normals, origin);
-  out.features = detail::localize_fpfh(out.coarse, settings);
-  if (out.coarse.size() >= 3) out.coarse_tree = std::make_unique<KdTree3f>(out.coarse.points);
+  if (stages == LocalizeStages::kCoarseAndFine) {
+    out.coarse = downsample(settings.voxel_size);
+    detail::localize_normals(out.coarse, settings, settings.voxel_size, settings.use_target_normals, origin);
+    out.features = detail::localize_fpfh(out.coarse, settings);
+    if (out.coarse.size() >= 3) out.coarse_tree = std::make_unique<KdTree3f>(out.coarse.points);
+  }
   out.fine = downsample(settings.fine_voxel_size);
   if (settings.icp.method == IcpMethod::kPointToPlane || out.fine.has_normals()) {
     detail::localize_normals(out.fine, settings, settings.fine_voxel_size, settings.use_target_normals, origin);
@@ -138,11 +173,7 @@ inline LocalizeResult localize_coarse_to_fine(const PointCloud& source, const Lo
   SacIaSettings ss = settings.sac_ia;
   ss.huber_threshold = settings.huber_factor * settings.voxel_size;
   ss.max_correspondence_distance = std::max(ss.huber_threshold, settings.correspondence_factor * settings.voxel_size);
-  PointCloud fine = detail::localize_downsample(source, settings.fine_voxel_size);
-  fine.normals.clear();
-  if (target.fine.has_normals() && fine.size() >= 3) {  // for the normal-angle rejection
-    detail::localize_normals(fine, settings, settings.fine_voxel_size, false, settings.source_viewpoint);
-  }
+  const PointCloud fine = detail::localize_fine_source(source, target.fine, settings);
   // SAC-IA, then the gated ICP (and its polish) from its best hypothesis.
   auto attempt = [&](const SacIaSettings& sac, SacIaResult& coarse_out, IcpResult& fine_out) {
     auto t = std::chrono::steady_clock::now();
@@ -150,23 +181,7 @@ inline LocalizeResult localize_coarse_to_fine(const PointCloud& source, const Lo
     out.seconds_coarse += detail::seconds_since(t);
     if (coarse_out.status == Status::kInsufficientData) return false;
     t = std::chrono::steady_clock::now();
-    fine_out = align_icp(fine, target.fine, *target.fine_tree, coarse_out.T_target_source, settings.icp);
-    if (settings.polish && fine_out.status != Status::kInsufficientData) {
-      IcpSettings ps = settings.icp;
-      ps.max_correspondence_distance = ps.min_correspondence_distance;
-      ps.max_rounds = 1;
-      ps.min_overlap = 0.0;
-      const IcpResult polished = align_icp(fine, target.fine, *target.fine_tree, fine_out.T_target_source, ps);
-      if (polished.status != Status::kInsufficientData && polished.status != Status::kDegenerate) {
-        fine_out.T_target_source = polished.T_target_source;
-        fine_out.iterations += polished.iterations;
-        fine_out.num_inliers = polished.num_inliers;
-        fine_out.rmse = polished.rmse;
-        fine_out.degeneracy = polished.degeneracy;
-        fine_out.overlap =
-            overlap_ratio(fine, *target.fine_tree, polished.T_target_source, ps.overlap_distance).overlap;
-      }
-    }
+    fine_out = detail::localize_fine_stage(fine, target, coarse_out.T_target_source, settings);
     out.seconds_fine += detail::seconds_since(t);
     return true;
   };
@@ -204,6 +219,18 @@ inline LocalizeResult localize_coarse_to_fine(const PointCloud& source, const Lo
   out.rmse = out.fine.rmse;
   out.degeneracy = out.fine.degeneracy;
   return out;
+}
+
+inline IcpResult refine_localization(const PointCloud& source, const LocalizeTarget& target,
+                                     const Eigen::Isometry3d& T_target_source, const LocalizeSettings& settings) {
+  detail::check_localize_settings(settings);
+  source.check_consistent("refine_localization: source");
+  PLUMB_CHECK(T_target_source.matrix().allFinite(), "refine_localization: the initial pose is not finite");
+  IcpResult r;
+  r.T_target_source = T_target_source;
+  if (!target.fine_tree) return r;  // kInsufficientData
+  const PointCloud fine = detail::localize_fine_source(source, target.fine, settings);
+  return detail::localize_fine_stage(fine, target, T_target_source, settings);
 }
 
 inline LocalizeResult localize_coarse_to_fine(const PointCloud& source, const PointCloud& target,
