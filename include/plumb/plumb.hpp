@@ -57,6 +57,7 @@
 #include "plumb/eval/metrics.hpp"
 
 #include "plumb/scan2d/cloud_to_scan.hpp"
+#include "plumb/scan2d/correlative.hpp"
 #include "plumb/scan2d/laser_scan.hpp"
 #include "plumb/scan2d/plicp.hpp"
 #include "plumb/scan2d/scan_odometry.hpp"
@@ -94,6 +95,7 @@
 #include "plumb/sim/wheel_model.hpp"
 #include "plumb/sim/world.hpp"
 
+#include "plumb/pipeline/bim_localizer.hpp"
 #include "plumb/pipeline/bim_odometry.hpp"
 #include "plumb/pipeline/hybrid_lio.hpp"
 #include "plumb/pipeline/pose_composer.hpp"

@@ -1,0 +1,142 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+/// @file
+/// @brief BimLocalizer (SEEDS A1, issue 8 item 2): where is the robot in the building, from its
+///        first LiDAR frame alone?
+///
+/// The seed finds the frame in the BIM cloud with FPFH + SAC-IA, then the overlap-gated ICP. In an
+/// office (rooms alike, thin walls, furniture the model does not have) the FPFH matches between
+/// model and scan are mostly wrong and SAC-IA found none of eight random starts (issue 8 notes).
+/// A ground robot stands on a floor with its base level, so the unknowns that matter are
+/// (storey, x, y, heading). BimLocalizer therefore:
+///  1. per walkable storey, builds a likelihood grid of the model's vertical faces between
+///     slice_min and slice_max above the floor, with the storey's free floor as the allowed
+///     positions (CorrelativeMap2D);
+///  2. projects the frame's points in the same height band (in the base frame) to 2D and searches
+///     every storey, heading and free position exhaustively by branch and bound;
+///  3. refines the best pose in 3D against the BIM cloud with the seed's overlap-gated ICP
+///     (refine_localization());
+///  4. gates: a score too low (the frame is not from this building), a second place scoring
+///     almost as well (ambiguous: give a start hint), or an ICP that fails or moves far.
+
+#include <cstddef>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "plumb/bim/mesh.hpp"
+#include "plumb/core/point_cloud.hpp"
+#include "plumb/core/status.hpp"
+#include "plumb/registration/localize.hpp"
+#include "plumb/scan2d/correlative.hpp"
+
+namespace plumb {
+
+/// @brief Grid settings of BimLocalizerSettings::map.
+inline CorrelativeMapSettings default_localizer_map() {
+  CorrelativeMapSettings m;
+  m.resolution = 0.1;
+  m.sigma = 0.1;
+  m.levels = 7;
+  return m;
+}
+
+/// @brief Fine-stage settings of BimLocalizerSettings::fine: localize_settings_for_voxel(0.3)
+///        (ICP from 0.6 m down to 0.1 m, fine voxel 0.1 m) with up to 50 iterations per round.
+inline LocalizeSettings default_localizer_fine() {
+  LocalizeSettings s = localize_settings_for_voxel(0.15);
+  s.icp.max_iterations = 50;
+  return s;
+}
+
+/// @brief Settings of BimLocalizer.
+struct BimLocalizerSettings {
+  /// Per-storey likelihood grids: 10 cm cells (the ICP refines), sigma 10 cm, 6.4 m top windows.
+  CorrelativeMapSettings map = default_localizer_map();
+  double slice_min = 0.3;          ///< height band above the floor used, model and frame [m]
+  double slice_max = 2.2;          ///< [m]
+  double max_normal_z = 0.5;       ///< model points count as vertical faces when |n_z| <= this
+  double max_range = 30.0;         ///< frame points farther from the LiDAR are not used [m]
+  std::size_t max_points = 500;    ///< frame points in the search (thinned evenly)
+  int storey = -1;                 ///< BimMesh::storeys index to search; -1 = every walkable storey
+  double min_walkable_area = 4.0;  ///< storeys with less free floor are skipped [m^2]
+  /// Gate: mean likelihood of the frame's points at the best pose, [0, 1]. Frames from another
+  /// building score lower (measured in tests/pipeline/bim_localizer_test.cpp).
+  double min_score = 0.45;
+  /// Gate: a pose at least ambiguity_distance / ambiguity_angle from the best one scoring
+  /// >= (1 - ambiguity_margin) * best makes the result kRejected with `ambiguous` set.
+  double ambiguity_margin = 0.05;
+  double ambiguity_distance = 1.0; ///< [m]
+  double ambiguity_angle = 0.35;   ///< [rad]
+  /// When the 2D scores are that close, both poses are refined in 3D and the one whose ICP overlap
+  /// is higher by at least this much wins (ceiling heights, sills, stairs tell storeys and mirror
+  /// images apart); otherwise the result is ambiguous.
+  double ambiguity_overlap_margin = 0.05;
+  /// Fine stage (refine_localization): BIM cloud and frame at fine_voxel_size, point-to-plane ICP.
+  LocalizeSettings fine = default_localizer_fine();
+  double max_refine_shift = 0.5;   ///< gate: ICP moving the base farther than this from the 2D pose [m]
+  /// Gate: at most this fraction of the frame's points (height band) may lie behind a model wall
+  /// that is solid over the whole band (no door or window there), as seen from the LiDAR, more
+  /// than see_through_margin beyond it (CorrelativeMap2D::see_through).
+  double max_see_through = 0.17;
+  double see_through_margin = 1.0;  ///< [m] (large enough that rays grazing a wall do not count)
+};
+
+/// @brief Result of BimLocalizer::localize().
+struct BimLocalization {
+  /// kOk; kInsufficientData (too few frame points in the band); kRejected (score gate, ambiguous,
+  /// ICP moved too far, or nothing found in the hint region); the ICP's status when it failed.
+  Status status = Status::kInsufficientData;
+  Eigen::Isometry3d T_bim_base = Eigen::Isometry3d::Identity();  ///< refined base pose in the BIM frame
+  Eigen::Isometry3d T_bim_base_search = Eigen::Isometry3d::Identity();  ///< the 2D search's pose (floor height)
+  int storey = -1;                 ///< BimMesh::storeys index of the pose
+  double score = 0.0;              ///< 2D score of the best pose, [0, 1]
+  double second_score = 0.0;       ///< best score away from it (any storey), [0, 1]
+  Eigen::Isometry3d T_bim_base_second = Eigen::Isometry3d::Identity();  ///< that pose
+  bool ambiguous = false;          ///< see BimLocalizerSettings::ambiguity_margin
+  double second_overlap = -1.0;    ///< 3D overlap at the second pose (-1: not refined, scores far apart)
+  double see_through = 0.0;        ///< frame points seen through model walls at the result, [0, 1]
+  IcpResult fine;                  ///< the 3D refinement (overlap, rmse, degeneracy)
+  std::size_t num_points = 0;      ///< frame points in the 2D search
+  std::size_t nodes_scored = 0;    ///< branch-and-bound nodes over all storeys
+  double seconds_search = 0.0, seconds_fine = 0.0;
+};
+
+/// @brief Finds LiDAR frames in a building (see the file comment). Build once per model.
+class BimLocalizer {
+ public:
+  /// @param mesh       the building (storeys, floor plans)
+  /// @param bim_cloud  the model's surfaces with normals, e.g. sample_bim_cloud(mesh, 0.05)
+  /// @throws plumb::Error for bad settings, a mesh without walkable storey, or a cloud without normals
+  BimLocalizer(const bim::BimMesh& mesh, const PointCloud& bim_cloud, const BimLocalizerSettings& settings = {});
+
+  /// @brief Localize one frame (LiDAR frame, deskewed if the robot moved), base assumed level.
+  /// @param hint  rough base position (x, y in the BIM frame): only poses within hint_radius count
+  /// @throws plumb::Error for inconsistent cloud fields, a non-finite extrinsic or a bad hint
+  BimLocalization localize(const PointCloud& frame, const Eigen::Isometry3d& T_base_lidar,
+                           const std::optional<Vector2d>& hint = std::nullopt, double hint_radius = 3.0) const;
+
+  /// @brief Storeys searched (BimMesh::storeys indices) and their floor heights.
+  std::vector<int> storeys() const;
+  const BimLocalizerSettings& settings() const { return settings_; }
+  double seconds_prepare() const { return seconds_prepare_; }  ///< constructor time [s]
+
+ private:
+  struct StoreyMap {
+    int index = -1;
+    double floor_z = 0.0;
+    std::unique_ptr<CorrelativeMap2D> map;
+    /// Walls that are solid over the whole height band (no door or window in the column): what a
+    /// ray at any height cannot pass, for the see-through gate.
+    std::unique_ptr<CorrelativeMap2D> solid;
+  };
+  BimLocalizerSettings settings_;
+  std::vector<StoreyMap> maps_;
+  LocalizeTarget fine_;
+  double seconds_prepare_ = 0.0;
+};
+
+}  // namespace plumb

@@ -1,0 +1,294 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "plumb/pipeline/bim_localizer.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <unordered_map>
+#include <unordered_set>
+
+#include <Eigen/Eigenvalues>
+
+#include "plumb/bim/floor_plan.hpp"
+#include "plumb/core/error.hpp"
+
+namespace plumb {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+Eigen::Isometry3d base_pose(const Pose2& p, double z) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(p.theta, Vector3d::UnitZ()).toRotationMatrix();
+  T.translation() = Vector3d(p.x, p.y, z);
+  return T;
+}
+
+/// Normal of each 2D point from the points within `radius` (PCA line fit), facing `sensor`; NaN
+/// where the neighbourhood is not a clear line (corners, clutter, too few points).
+std::vector<Vector2d> scan_normals(const std::vector<Vector2d>& pts, const Vector2d& sensor, double radius) {
+  std::unordered_map<std::uint64_t, std::vector<std::size_t>> cells;
+  auto key = [](std::int64_t cx, std::int64_t cy) {
+    return (static_cast<std::uint64_t>(cx + (1LL << 31)) << 32) ^ static_cast<std::uint64_t>(cy + (1LL << 31));
+  };
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    cells[key(static_cast<std::int64_t>(std::floor(pts[i].x() / radius)),
+              static_cast<std::int64_t>(std::floor(pts[i].y() / radius)))].push_back(i);
+  }
+  std::vector<Vector2d> normals(pts.size(), Vector2d::Constant(std::nan("")));
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const auto cx = static_cast<std::int64_t>(std::floor(pts[i].x() / radius));
+    const auto cy = static_cast<std::int64_t>(std::floor(pts[i].y() / radius));
+    Vector2d mean = Vector2d::Zero();
+    Eigen::Matrix2d second = Eigen::Matrix2d::Zero();
+    int count = 0;
+    for (std::int64_t dy = -1; dy <= 1; ++dy) {
+      for (std::int64_t dx = -1; dx <= 1; ++dx) {
+        const auto it = cells.find(key(cx + dx, cy + dy));
+        if (it == cells.end()) continue;
+        for (std::size_t j : it->second) {
+          const Vector2d d = pts[j] - pts[i];
+          if (d.squaredNorm() > radius * radius) continue;
+          mean += d;
+          second += d * d.transpose();
+          ++count;
+        }
+      }
+    }
+    if (count < 4) continue;
+    mean /= count;
+    const Eigen::Matrix2d cov = second / count - mean * mean.transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(cov);
+    if (es.eigenvalues()(0) > 0.05 * es.eigenvalues()(1)) continue;  // not a line
+    Vector2d n = es.eigenvectors().col(0);
+    if (n.dot(sensor - pts[i]) < 0.0) n = -n;
+    normals[i] = n;
+  }
+  return normals;
+}
+
+void check_settings(const BimLocalizerSettings& s) {
+  PLUMB_CHECK(std::isfinite(s.slice_min) && std::isfinite(s.slice_max) && s.slice_min < s.slice_max,
+              "BimLocalizer: slice_min = " << s.slice_min << " must be below slice_max = " << s.slice_max);
+  PLUMB_CHECK(std::isfinite(s.max_normal_z) && s.max_normal_z >= 0.0 && s.max_normal_z <= 1.0,
+              "BimLocalizer: max_normal_z = " << s.max_normal_z << " must be in [0, 1]");
+  PLUMB_CHECK(std::isfinite(s.max_range) && s.max_range > 0.0, "BimLocalizer: max_range = " << s.max_range << " must be > 0");
+  PLUMB_CHECK(s.max_points >= 20, "BimLocalizer: max_points = " << s.max_points << " must be >= 20");
+  PLUMB_CHECK(std::isfinite(s.min_score) && s.min_score >= 0.0 && s.min_score <= 1.0,
+              "BimLocalizer: min_score = " << s.min_score << " must be in [0, 1]");
+  PLUMB_CHECK(std::isfinite(s.ambiguity_margin) && s.ambiguity_margin >= 0.0 && s.ambiguity_margin < 1.0,
+              "BimLocalizer: ambiguity_margin = " << s.ambiguity_margin << " must be in [0, 1)");
+  PLUMB_CHECK(std::isfinite(s.ambiguity_distance) && s.ambiguity_distance > 0.0 && std::isfinite(s.ambiguity_angle) &&
+                  s.ambiguity_angle >= 0.0,
+              "BimLocalizer: ambiguity_distance must be > 0 and ambiguity_angle >= 0");
+  PLUMB_CHECK(std::isfinite(s.ambiguity_overlap_margin) && s.ambiguity_overlap_margin >= 0.0,
+              "BimLocalizer: ambiguity_overlap_margin = " << s.ambiguity_overlap_margin << " must be >= 0");
+  PLUMB_CHECK(std::isfinite(s.max_see_through) && s.max_see_through >= 0.0 && std::isfinite(s.see_through_margin) &&
+                  s.see_through_margin >= 0.0,
+              "BimLocalizer: max_see_through and see_through_margin must be >= 0");
+  PLUMB_CHECK(std::isfinite(s.max_refine_shift) && s.max_refine_shift > 0.0,
+              "BimLocalizer: max_refine_shift = " << s.max_refine_shift << " must be > 0");
+}
+
+}  // namespace
+
+BimLocalizer::BimLocalizer(const bim::BimMesh& mesh, const PointCloud& bim_cloud, const BimLocalizerSettings& settings)
+    : settings_(settings) {
+  const auto t0 = std::chrono::steady_clock::now();
+  check_settings(settings_);
+  bim_cloud.check_consistent("BimLocalizer: BIM cloud");
+  PLUMB_CHECK(bim_cloud.has_normals(), "BimLocalizer: the BIM cloud has no normals (use sample_bim_cloud())");
+  PLUMB_CHECK(!mesh.storeys.empty(), "BimLocalizer: the model has no storey");
+  const int num_storeys = static_cast<int>(mesh.storeys.size());
+  PLUMB_CHECK(settings_.storey < num_storeys, "BimLocalizer: storey " << settings_.storey << " does not exist (the model has "
+                                                                      << num_storeys << " storeys)");
+  bim::OccupancyGridSettings gs;
+  gs.min_walkable_area = settings_.min_walkable_area;
+  for (int k = 0; k < num_storeys; ++k) {
+    if (settings_.storey >= 0 && k != settings_.storey) continue;
+    gs.storey = k;
+    std::shared_ptr<bim::OccupancyGrid> grid;
+    try {
+      grid = std::make_shared<bim::OccupancyGrid>(bim::floor_plan(mesh, gs));
+    } catch (const Error&) {
+      if (settings_.storey >= 0) throw;
+      continue;  // not walkable
+    }
+    std::vector<Vector2d> walls, wall_normals;
+    for (std::size_t i = 0; i < bim_cloud.size(); ++i) {
+      const Vector3f& p = bim_cloud.points[i];
+      const Vector3f& n = bim_cloud.normals[i];
+      const double h = p.z() - grid->floor_z;
+      if (!p.allFinite() || !n.allFinite() || h < settings_.slice_min || h > settings_.slice_max) continue;
+      if (std::abs(n.z()) > settings_.max_normal_z * n.norm()) continue;
+      walls.emplace_back(p.x(), p.y());
+      wall_normals.emplace_back(n.x(), n.y());
+    }
+    if (walls.empty()) continue;
+    // Solid columns: wall points in each of three sub-bands of the height band, per 10 cm cell.
+    std::unordered_map<std::uint64_t, int> bands;
+    auto cell_key = [](double x, double y) {
+      return (static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(x / 0.1)) + (1LL << 31)) << 32) ^
+             static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(y / 0.1)) + (1LL << 31));
+    };
+    const double band = (settings_.slice_max - settings_.slice_min) / 3.0;
+    for (std::size_t i = 0; i < bim_cloud.size(); ++i) {
+      const Vector3f& p = bim_cloud.points[i];
+      const Vector3f& n = bim_cloud.normals[i];
+      const double h = p.z() - grid->floor_z;
+      if (!p.allFinite() || !n.allFinite() || h < settings_.slice_min || h > settings_.slice_max) continue;
+      if (std::abs(n.z()) > settings_.max_normal_z * n.norm()) continue;
+      const int b = std::min(2, static_cast<int>((h - settings_.slice_min) / band));
+      bands[cell_key(p.x(), p.y())] |= 1 << b;
+    }
+    std::vector<Vector2d> solid;
+    for (const Vector2d& w : walls)
+      if (bands[cell_key(w.x(), w.y())] == 7) solid.push_back(w);
+    StoreyMap m;
+    if (!solid.empty()) {
+      CorrelativeMapSettings sm = settings_.map;
+      sm.levels = 1;
+      sm.orientation_bins = 0;
+      sm.sigma = 0.5 * sm.resolution;  // narrow: a ray grazing a wall does not count as crossing it
+      m.solid = std::make_unique<CorrelativeMap2D>(solid, sm);
+    }
+    m.index = k;
+    m.floor_z = grid->floor_z;
+    m.map = std::make_unique<CorrelativeMap2D>(walls, settings_.map,
+                                               [grid](const Vector2d& t) { return grid->is_free(t); }, wall_normals);
+    maps_.push_back(std::move(m));
+  }
+  PLUMB_CHECK(!maps_.empty(), "BimLocalizer: no walkable storey with walls in the BIM cloud (free floor >= "
+                                  << settings_.min_walkable_area << " m^2 and vertical faces "
+                                  << settings_.slice_min << ".." << settings_.slice_max << " m above it)");
+  fine_ = prepare_localize_target(bim_cloud, settings_.fine, LocalizeStages::kFineOnly);
+  seconds_prepare_ = seconds_since(t0);
+}
+
+std::vector<int> BimLocalizer::storeys() const {
+  std::vector<int> out;
+  for (const StoreyMap& m : maps_) out.push_back(m.index);
+  return out;
+}
+
+BimLocalization BimLocalizer::localize(const PointCloud& frame, const Eigen::Isometry3d& T_base_lidar,
+                                       const std::optional<Vector2d>& hint, double hint_radius) const {
+  frame.check_consistent("BimLocalizer::localize: frame");
+  PLUMB_CHECK(T_base_lidar.matrix().allFinite(), "BimLocalizer::localize: T_base_lidar is not finite");
+  PLUMB_CHECK(!hint || (hint->allFinite() && std::isfinite(hint_radius) && hint_radius > 0.0),
+              "BimLocalizer::localize: the hint must be finite and its radius > 0");
+  BimLocalization out;
+  const auto t0 = std::chrono::steady_clock::now();
+
+  // The frame's points in the height band, in the base frame, one per map cell.
+  const double r = settings_.map.resolution;
+  const Eigen::Isometry3f T = T_base_lidar.cast<float>();
+  std::vector<Vector2d> scan;
+  std::unordered_set<std::uint64_t> seen;
+  for (const Vector3f& pl : frame.points) {
+    if (!pl.allFinite() || pl.norm() > settings_.max_range) continue;
+    const Vector3f p = T * pl;
+    if (p.z() < settings_.slice_min || p.z() > settings_.slice_max) continue;
+    const auto cx = static_cast<std::int64_t>(std::floor(p.x() / r));
+    const auto cy = static_cast<std::int64_t>(std::floor(p.y() / r));
+    const std::uint64_t key = (static_cast<std::uint64_t>(cx + (1LL << 31)) << 32) ^ static_cast<std::uint64_t>(cy + (1LL << 31));
+    if (seen.insert(key).second) scan.emplace_back(p.x(), p.y());
+  }
+
+  const std::vector<Vector2d> normals = scan_normals(scan, T_base_lidar.translation().head<2>(), 3.0 * r);
+
+  CorrelativeSearchSettings ss;
+  ss.max_points = settings_.max_points;
+  ss.min_score = settings_.min_score * (1.0 - settings_.ambiguity_margin);  // a second pose below this cannot matter
+  ss.second_distance = settings_.ambiguity_distance;
+  ss.second_angle = settings_.ambiguity_angle;
+  if (hint) {
+    ss.region_center = *hint;
+    ss.region_radius = hint_radius;
+  }
+  // Best and second best over all storeys: another storey's pose always counts as "far".
+  double best = -1.0, second = 0.0;
+  const StoreyMap* best_map = nullptr;
+  Pose2 best_pose, second_pose;
+  const StoreyMap* second_map = nullptr;
+  bool any_data = false;
+  for (const StoreyMap& m : maps_) {
+    const CorrelativeResult cr = m.map->match(scan, ss, normals);
+    out.num_points = cr.num_points;
+    out.nodes_scored += cr.nodes_scored;
+    if (cr.status == Status::kInsufficientData) continue;
+    any_data = true;
+    if (cr.status != Status::kOk) continue;
+    auto offer_second = [&](double score, const Pose2& pose, const StoreyMap* map) {
+      if (score > second) {
+        second = score;
+        second_pose = pose;
+        second_map = map;
+      }
+    };
+    if (cr.score > best) {
+      if (best_map) offer_second(best, best_pose, best_map);
+      best = cr.score;
+      best_pose = cr.pose;
+      best_map = &m;
+    } else {
+      offer_second(cr.score, cr.pose, &m);
+    }
+    if (cr.has_second) offer_second(cr.second_score, cr.second_pose, &m);
+  }
+  out.seconds_search = seconds_since(t0);
+  if (!any_data) {
+    out.status = Status::kInsufficientData;
+    return out;
+  }
+  if (!best_map) {
+    out.status = Status::kRejected;  // nothing scored even the lowered floor (or nothing in the hint region)
+    return out;
+  }
+  out.storey = best_map->index;
+  out.score = best;
+  out.second_score = second;
+  out.T_bim_base_search = base_pose(best_pose, best_map->floor_z);
+  if (second_map) out.T_bim_base_second = base_pose(second_pose, second_map->floor_z);
+  const bool close_scores = second_map && second >= (1.0 - settings_.ambiguity_margin) * best;
+
+  const auto t1 = std::chrono::steady_clock::now();
+  out.fine = refine_localization(frame, fine_, out.T_bim_base_search * T_base_lidar, settings_.fine);
+  if (close_scores) {
+    // Two places explain the floor-plan slice about equally: let the whole 3D frame decide.
+    IcpResult other = refine_localization(frame, fine_, out.T_bim_base_second * T_base_lidar, settings_.fine);
+    if (other.overlap > out.fine.overlap) {
+      std::swap(out.fine, other);
+      std::swap(out.T_bim_base_search, out.T_bim_base_second);
+      std::swap(out.score, out.second_score);
+      out.storey = second_map->index;
+    }
+    out.second_overlap = other.overlap;
+    out.ambiguous = out.fine.overlap - other.overlap < settings_.ambiguity_overlap_margin;
+  }
+  out.T_bim_base = out.fine.T_target_source * T_base_lidar.inverse();
+  out.seconds_fine = seconds_since(t1);
+
+  const double shift = (out.T_bim_base.translation() - out.T_bim_base_search.translation()).norm();
+  const StoreyMap* result_map = best_map;
+  for (const StoreyMap& m : maps_)
+    if (m.index == out.storey) result_map = &m;
+  const Pose2 refined{out.T_bim_base.translation().x(), out.T_bim_base.translation().y(),
+                      std::atan2(out.T_bim_base.linear()(1, 0), out.T_bim_base.linear()(0, 0))};
+  if (result_map->solid) {
+    out.see_through = result_map->solid->see_through(scan, refined, T_base_lidar.translation().head<2>(),
+                                                     settings_.see_through_margin);
+  }
+  if (out.score < settings_.min_score || out.ambiguous || shift > settings_.max_refine_shift ||
+      out.see_through > settings_.max_see_through) {
+    out.status = Status::kRejected;
+  } else {
+    out.status = out.fine.status;
+  }
+  return out;
+}
+
+}  // namespace plumb
