@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// `plumb demo [-o DIR] [--length M] [--seed S] [--threads N] [--localize] [--json]`: the whole
+// `plumb demo [-o DIR] [--length M] [--seed S] [--threads N] [--surveyed-start] [--json]`: the whole
 // product on the built-in sample. Writes the procedural demo office (IFC4), simulates a robot driving
 // two loops through it (rfans32 LiDAR, wheel encoders, IMU, as-built deviations, furniture, people),
-// runs the BIM-corrected odometry from the surveyed start (or, with --localize, from the first
-// frame localized in the model) and prints the seed's Table 2 (wheel odometry, LiDAR without BIM,
+// localizes the first frame in the model (BimLocalizer, no hint; --surveyed-start starts at the
+// true pose instead), runs the BIM-corrected odometry and prints the seed's Table 2 (wheel odometry, LiDAR without BIM,
 // BIM-corrected) against the exact ground truth.
 // DIR receives demo_office.ifc, dump/ (the frame dump) and run/ (what `plumb run` writes).
 
@@ -34,7 +34,7 @@ struct DemoCommandOptions {
   int loops = 2;
   std::uint64_t seed = 1;
   int threads = 0;
-  bool localize = false;
+  bool surveyed_start = false;
   bool json = false;
 };
 
@@ -77,15 +77,9 @@ void run_demo(const DemoCommandOptions& o) {
 
   const io::FrameDumpReader dump(dump_dir);
   RunSettings rs;
-  if (o.localize) {
-    // An operator's hint: a 3 m circle around a point 1.5 m from the true start (the room).
-    rs.start_hint = dump.ground_truth().poses.front().translation() + Eigen::Vector3d(1.2, -0.9, 0.0);
-    rs.start_hint_radius = 3.0;
-  } else {
-    // The robot starts at a surveyed pose (global localization among the demo office's
-    // look-alike rooms is not reliable yet: see --localize).
-    rs.initial_pose = dump.ground_truth().poses.front();
-  }
+  // The first frame is found in the model without any hint (BimLocalizer), unless the operator
+  // gives the surveyed start pose.
+  if (o.surveyed_start) rs.initial_pose = dump.ground_truth().poses.front();
   if (!o.json) rs.progress = terminal_progress("plumb run");
   const RunReport r = run_bim_odometry(dump, mesh, rs);
   const nlohmann::json j = run_report_json(r);
@@ -117,8 +111,8 @@ void register_demo_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--seed", o->seed, "Seed of the simulation")->capture_default_str();
   cmd->add_option("--threads", o->threads, "Threads of the simulator (0 = all cores)")->check(CLI::Range(0, 256));
-  cmd->add_flag("--localize", o->localize,
-                "Localize the first frame in the model (with a 3 m start hint) instead of starting at the surveyed pose");
+  cmd->add_flag("--surveyed-start", o->surveyed_start,
+                "Start at the true (surveyed) pose instead of localizing the first frame in the model");
   cmd->add_flag("--json", o->json, "Print the report as JSON");
   cmd->callback([o]() { run_demo(*o); });
 }

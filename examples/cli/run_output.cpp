@@ -31,8 +31,11 @@ nlohmann::json run_report_json(const RunReport& r) {
   j["localized"] = r.localized;
   j["localization_status"] = to_string(r.localization_status);
   if (r.localized) {
-    j["localization"] = {{"overlap", r.localization.overlap}, {"rmse", r.localization.rmse},
-                         {"ambiguous", r.localization.ambiguous}, {"second_overlap", r.localization.second_overlap}};
+    const BimLocalization& l = r.localization;
+    j["localization"] = {{"score", l.score},           {"second_score", l.second_score}, {"ambiguous", l.ambiguous},
+                         {"overlap", l.fine.overlap},  {"rmse", l.fine.rmse},            {"see_through", l.see_through},
+                         {"storey", l.storey},         {"seconds_search", l.seconds_search},
+                         {"seconds_fine", l.seconds_fine}};
   }
   j["T_bim_base0"] = pose_json(r.T_bim_base0);
   j["bim_points"] = r.bim_points;
@@ -69,12 +72,13 @@ void write_run_outputs(const RunReport& r, const nlohmann::json& report, const b
   }
   if (r.localization_status != Status::kOk) {
     if (r.localization.ambiguous) {
-      PLUMB_THROW(dump.dir() << ": the first frame fits two places of " << model_name << " about as well (overlap "
-                             << r.localization.overlap << " and " << r.localization.second_overlap
+      PLUMB_THROW(dump.dir() << ": the first frame fits two places of " << model_name << " about as well (score "
+                             << r.localization.score << " and " << r.localization.second_score
                              << "); give --start-hint X Y (the room the robot starts in) or --gt-start");
     }
     PLUMB_THROW(dump.dir() << ": the first frame could not be localized in " << model_name << " ("
-                           << to_string(r.localization_status) << ", overlap " << r.localization.overlap
+                           << to_string(r.localization_status) << ", score " << r.localization.score << ", overlap "
+                           << r.localization.fine.overlap << ", see-through " << r.localization.see_through
                            << "); give --start-hint X Y, --gt-start, or check that the dump was recorded in this building");
   }
   io::write_tum(r.wheel, out_dir + "/wheel.tum");
@@ -100,8 +104,9 @@ void print_run_summary(const RunReport& r) {
               r.frames.size(), r.frames_per_second, r.anchors_accepted, r.anchors_rejected, r.anchors_attempted,
               r.fallbacks);
   if (r.localized) {
-    std::printf("initial localization: %s in %.2f s (overlap %.2f, rmse %.1f mm)\n", to_string(r.localization_status),
-                r.seconds_localize, r.localization.overlap, r.localization.rmse * 1e3);
+    std::printf("initial localization: %s in %.2f s (score %.2f, second %.2f, overlap %.2f, rmse %.1f mm)\n",
+                to_string(r.localization_status), r.seconds_localize, r.localization.score, r.localization.second_score,
+                r.localization.fine.overlap, r.localization.fine.rmse * 1e3);
   }
   if (!r.has_ground_truth) return;
   std::printf("initial pose error: %.1f mm, %.3f deg\n", r.initial_error_xy * 1e3, r.initial_error_yaw_deg);

@@ -114,16 +114,16 @@ RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& 
   } else {
     report.localized = true;
     first_frame = frame_at(0);
-    LocalizeSettings ls = settings.localize;
+    std::optional<Vector2d> hint;
     if (settings.start_hint) {
       PLUMB_CHECK(settings.start_hint->allFinite() && settings.start_hint_radius > 0.0,
                   "run_bim_odometry: the start hint must be finite and its radius > 0");
-      ls.sac_ia.region_center = *settings.start_hint;
-      ls.sac_ia.region_radius = settings.start_hint_radius;
+      hint = settings.start_hint->head<2>();
     }
-    report.localization = localize_coarse_to_fine(*first_frame, *bim_cloud, ls);
+    const BimLocalizer localizer(mesh, *bim_cloud, settings.localizer);
+    report.localization = localizer.localize(*first_frame, T_base_lidar, hint, settings.start_hint_radius);
     report.localization_status = report.localization.status;
-    report.T_bim_base0 = report.localization.T_target_source * T_base_lidar.inverse();
+    report.T_bim_base0 = report.localization.T_bim_base;
   }
   report.seconds_localize = seconds_since(t_loc);
   Trajectory gt;

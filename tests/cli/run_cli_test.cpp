@@ -109,7 +109,11 @@ TEST_F(CliTest, DemoRunsTheWholeJobAndReportsTableTwo) {
   const test::RunResult r = run_cli("demo -o '" + dir + "' --length 6 --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const Json j = Json::parse(r.out);
+  // The first frame is localized in the model without a hint (BimLocalizer) ...
+  EXPECT_TRUE(j.at("localized").get<bool>());
   EXPECT_EQ(j.at("localization_status"), "ok");
+  EXPECT_LT(j.at("initial_error").at("xy").get<double>(), 0.05);
+  EXPECT_LT(j.at("initial_error").at("yaw_deg").get<double>(), 0.5);
   EXPECT_NEAR(j.at("simulation").at("path_length").get<double>(), 6.0, 0.5);
   const Json& end = j.at("table").at(2);
   EXPECT_LT(end.at("bim").at("error").get<double>(), 0.05);

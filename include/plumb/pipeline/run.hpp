@@ -17,6 +17,7 @@
 #include "plumb/bim/mesh.hpp"
 #include "plumb/core/trajectory.hpp"
 #include "plumb/io/frame_dump.hpp"
+#include "plumb/pipeline/bim_localizer.hpp"
 #include "plumb/pipeline/bim_odometry.hpp"
 #include "plumb/registration/localize.hpp"
 
@@ -26,10 +27,10 @@ namespace plumb {
 struct RunSettings {
   BimOdometrySettings odometry;     ///< T_base_lidar is taken from the dump's meta.json
   double bim_spacing = 0.05;        ///< BIM cloud point spacing [m]
-  /// Initial pose of the base in the BIM frame. Empty: localize the first frame in the BIM cloud
-  /// (SEEDS A1, localize_coarse_to_fine).
+  /// Initial pose of the base in the BIM frame. Empty: localize the first frame in the building
+  /// (BimLocalizer: floor-plan search, then the seed's overlap-gated ICP).
   std::optional<Eigen::Isometry3d> initial_pose;
-  LocalizeSettings localize;        ///< initial localization
+  BimLocalizerSettings localizer;   ///< initial localization
   /// Rough start position of the base in the BIM frame (x, y; z ignored), e.g. the room the robot
   /// starts in: the localization only considers poses within start_hint_radius of it.
   std::optional<Eigen::Vector3d> start_hint;
@@ -53,9 +54,9 @@ struct RunReport {
   Trajectory lidar;  ///< front end without BIM corrections
   Trajectory bim;    ///< corrected
   std::vector<BimFrameResult> frames;
-  bool localized = false;               ///< the initial pose came from localize_coarse_to_fine()
+  bool localized = false;               ///< the initial pose came from BimLocalizer
   Status localization_status = Status::kOk;
-  LocalizeResult localization;          ///< when localized
+  BimLocalization localization;         ///< when localized
   Eigen::Isometry3d T_bim_base0 = Eigen::Isometry3d::Identity();
   std::size_t bim_points = 0;
   std::size_t anchors_accepted = 0, anchors_rejected = 0, anchors_attempted = 0;
