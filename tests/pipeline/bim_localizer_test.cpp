@@ -144,7 +144,6 @@ TEST_P(BimLocalizerBuildingTest, RandomStartsAreFoundOrRejectedNeverWrong) {
   if (plain.found > 0) {
     EXPECT_LT(plain.errors[plain.errors.size() / 2], c.max_median);  // as-built deviations are 1 cm / 0.2 deg
   }
-  EXPECT_LT(plain.seconds[plain.seconds.size() / 2], 5.0);  // 1 s here in release; sanitizers are slower
   if (c.min_found_hinted > 0) {
     const Tally hinted = localize_all(c.name, b, *b.localizer, 1.0, 2.5);
     EXPECT_GE(hinted.found, c.min_found_hinted);
