@@ -27,27 +27,30 @@ Eigen::Isometry3d base_pose(const Pose2& p, double z) {
   return T;
 }
 
+/// Index of the cell of side `size` holding coordinate v.
+std::int64_t cell_of(double v, double size) { return static_cast<std::int64_t>(std::floor(v / size)); }
+
+/// Hash key of the 2D cell (cx, cy).
+std::uint64_t cell_key(std::int64_t cx, std::int64_t cy) {
+  return (static_cast<std::uint64_t>(cx + (1LL << 31)) << 32) ^ static_cast<std::uint64_t>(cy + (1LL << 31));
+}
+
 /// Normal of each 2D point from the points within `radius` (PCA line fit), facing `sensor`; NaN
 /// where the neighbourhood is not a clear line (corners, clutter, too few points).
 std::vector<Vector2d> scan_normals(const std::vector<Vector2d>& pts, const Vector2d& sensor, double radius) {
   std::unordered_map<std::uint64_t, std::vector<std::size_t>> cells;
-  auto key = [](std::int64_t cx, std::int64_t cy) {
-    return (static_cast<std::uint64_t>(cx + (1LL << 31)) << 32) ^ static_cast<std::uint64_t>(cy + (1LL << 31));
-  };
   for (std::size_t i = 0; i < pts.size(); ++i) {
-    cells[key(static_cast<std::int64_t>(std::floor(pts[i].x() / radius)),
-              static_cast<std::int64_t>(std::floor(pts[i].y() / radius)))].push_back(i);
+    cells[cell_key(cell_of(pts[i].x(), radius), cell_of(pts[i].y(), radius))].push_back(i);
   }
   std::vector<Vector2d> normals(pts.size(), Vector2d::Constant(std::nan("")));
   for (std::size_t i = 0; i < pts.size(); ++i) {
-    const auto cx = static_cast<std::int64_t>(std::floor(pts[i].x() / radius));
-    const auto cy = static_cast<std::int64_t>(std::floor(pts[i].y() / radius));
+    const std::int64_t cx = cell_of(pts[i].x(), radius), cy = cell_of(pts[i].y(), radius);
     Vector2d mean = Vector2d::Zero();
     Eigen::Matrix2d second = Eigen::Matrix2d::Zero();
     int count = 0;
     for (std::int64_t dy = -1; dy <= 1; ++dy) {
       for (std::int64_t dx = -1; dx <= 1; ++dx) {
-        const auto it = cells.find(key(cx + dx, cy + dy));
+        const auto it = cells.find(cell_key(cx + dx, cy + dy));
         if (it == cells.end()) continue;
         for (std::size_t j : it->second) {
           const Vector2d d = pts[j] - pts[i];
@@ -117,7 +120,11 @@ BimLocalizer::BimLocalizer(const bim::BimMesh& mesh, const PointCloud& bim_cloud
       if (settings_.storey >= 0) throw;
       continue;  // not walkable
     }
+    // Vertical faces in the band, and which thirds of the band each 10 cm column has faces in:
+    // columns with all three are solid (no door or window there).
     std::vector<Vector2d> walls, wall_normals;
+    std::unordered_map<std::uint64_t, int> bands;
+    const double band = (settings_.slice_max - settings_.slice_min) / 3.0;
     for (std::size_t i = 0; i < bim_cloud.size(); ++i) {
       const Vector3f& p = bim_cloud.points[i];
       const Vector3f& n = bim_cloud.normals[i];
@@ -126,27 +133,12 @@ BimLocalizer::BimLocalizer(const bim::BimMesh& mesh, const PointCloud& bim_cloud
       if (std::abs(n.z()) > settings_.max_normal_z * n.norm()) continue;
       walls.emplace_back(p.x(), p.y());
       wall_normals.emplace_back(n.x(), n.y());
+      bands[cell_key(cell_of(p.x(), 0.1), cell_of(p.y(), 0.1))] |= 1 << std::min(2, static_cast<int>((h - settings_.slice_min) / band));
     }
     if (walls.empty()) continue;
-    // Solid columns: wall points in each of three sub-bands of the height band, per 10 cm cell.
-    std::unordered_map<std::uint64_t, int> bands;
-    auto cell_key = [](double x, double y) {
-      return (static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(x / 0.1)) + (1LL << 31)) << 32) ^
-             static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(y / 0.1)) + (1LL << 31));
-    };
-    const double band = (settings_.slice_max - settings_.slice_min) / 3.0;
-    for (std::size_t i = 0; i < bim_cloud.size(); ++i) {
-      const Vector3f& p = bim_cloud.points[i];
-      const Vector3f& n = bim_cloud.normals[i];
-      const double h = p.z() - grid->floor_z;
-      if (!p.allFinite() || !n.allFinite() || h < settings_.slice_min || h > settings_.slice_max) continue;
-      if (std::abs(n.z()) > settings_.max_normal_z * n.norm()) continue;
-      const int b = std::min(2, static_cast<int>((h - settings_.slice_min) / band));
-      bands[cell_key(p.x(), p.y())] |= 1 << b;
-    }
     std::vector<Vector2d> solid;
     for (const Vector2d& w : walls)
-      if (bands[cell_key(w.x(), w.y())] == 7) solid.push_back(w);
+      if (bands[cell_key(cell_of(w.x(), 0.1), cell_of(w.y(), 0.1))] == 7) solid.push_back(w);
     StoreyMap m;
     if (!solid.empty()) {
       CorrelativeMapSettings sm = settings_.map;
@@ -192,10 +184,7 @@ BimLocalization BimLocalizer::localize(const PointCloud& frame, const Eigen::Iso
     if (!pl.allFinite() || pl.norm() > settings_.max_range) continue;
     const Vector3f p = T * pl;
     if (p.z() < settings_.slice_min || p.z() > settings_.slice_max) continue;
-    const auto cx = static_cast<std::int64_t>(std::floor(p.x() / r));
-    const auto cy = static_cast<std::int64_t>(std::floor(p.y() / r));
-    const std::uint64_t key = (static_cast<std::uint64_t>(cx + (1LL << 31)) << 32) ^ static_cast<std::uint64_t>(cy + (1LL << 31));
-    if (seen.insert(key).second) scan.emplace_back(p.x(), p.y());
+    if (seen.insert(cell_key(cell_of(p.x(), r), cell_of(p.y(), r))).second) scan.emplace_back(p.x(), p.y());
   }
 
   const std::vector<Vector2d> normals = scan_normals(scan, T_base_lidar.translation().head<2>(), 3.0 * r);
