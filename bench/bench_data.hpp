@@ -8,6 +8,8 @@
 #include <cstdlib>
 #include <string>
 
+#include <dlfcn.h>
+
 namespace plumb::bench {
 
 inline std::string data_dir() {
@@ -21,5 +23,13 @@ inline std::string data_dir() {
 
 /// @brief Absolute path of a file under the data directory.
 inline std::string data_path(const std::string& relative) { return data_dir() + "/" + relative; }
+
+/// @brief Limit OpenMP (used by Open3D) to one thread, so peers run single-threaded like plumb.
+///        libgomp reads OMP_NUM_THREADS when it loads, before main(), so this calls
+///        omp_set_num_threads through the already loaded runtime instead (no-op without OpenMP).
+inline void single_thread_openmp() {
+  using SetFn = void (*)(int);
+  if (void* sym = dlsym(RTLD_DEFAULT, "omp_set_num_threads")) reinterpret_cast<SetFn>(sym)(1);
+}
 
 }  // namespace plumb::bench

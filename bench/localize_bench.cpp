@@ -9,7 +9,6 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
-#include <dlfcn.h>
 #include <memory>
 #include <string>
 #include <vector>
@@ -154,16 +153,10 @@ void bm_open3d(benchmark::State& state) {
 }
 #endif
 
-/// Open3D uses OpenMP: one thread, like ours (see registration_bench.cpp).
-void single_thread_openmp() {
-  using SetFn = void (*)(int);
-  if (void* sym = dlsym(RTLD_DEFAULT, "omp_set_num_threads")) reinterpret_cast<SetFn>(sym)(1);
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
-  single_thread_openmp();
+  plumb::bench::single_thread_openmp();
   benchmark::RegisterBenchmark("bim_localize/plumb/fzk_haus", bm_plumb)->Unit(benchmark::kMillisecond)->Iterations(10);
   benchmark::RegisterBenchmark("bim_localize/plumb_sacia/fzk_haus", bm_plumb_sacia)
       ->Unit(benchmark::kMillisecond)

@@ -19,7 +19,6 @@
 #pragma GCC diagnostic ignored "-Warray-bounds"
 #endif
 
-#include <dlfcn.h>
 
 #include <cmath>
 #include <cstdint>
@@ -291,17 +290,10 @@ void bm_icp_open3d(benchmark::State& state) {
 }
 #endif
 
-/// Limit OpenMP (used by Open3D) to one thread. libgomp reads OMP_NUM_THREADS when it loads,
-/// before main(), so call omp_set_num_threads through the already loaded runtime instead.
-void single_thread_openmp() {
-  using SetFn = void (*)(int);
-  if (void* sym = dlsym(RTLD_DEFAULT, "omp_set_num_threads")) reinterpret_cast<SetFn>(sym)(1);
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
-  single_thread_openmp();
+  plumb::bench::single_thread_openmp();
   const std::string ds = kDataset;
   auto reg_bm = [](const std::string& name, void (*fn)(benchmark::State&)) {
     benchmark::RegisterBenchmark(name.c_str(), fn)->Unit(benchmark::kMillisecond);
