@@ -157,6 +157,12 @@ TEST(CorrelativeMatchTest, HintRegionAndBadInput) {
   huge.resolution = 0.001;  // a plan in millimetres read as metres
   EXPECT_THROW(CorrelativeMap2D({Vector2d(0, 0), Vector2d(8000, 5000)}, huge), plumb::Error);
   EXPECT_THROW(CorrelativeMap2D({}), plumb::Error);
+  CorrelativeMapSettings bins;
+  bins.orientation_bins = 3;
+  EXPECT_THROW(CorrelativeMap2D(pts, bins), plumb::Error);
+  EXPECT_THROW(CorrelativeMap2D(pts, ms, {}, std::vector<Vector2d>(2)), plumb::Error);  // one normal per point
+  EXPECT_THROW(map.score(scan, truth, std::vector<Vector2d>(1)), plumb::Error);
+  EXPECT_THROW(map.see_through(scan, truth, Vector2d::Zero(), -1.0), plumb::Error);
 }
 
 }  // namespace
