@@ -19,14 +19,15 @@ using Matrix15d = Eigen::Matrix<double, 15, 15>;
 using MatrixXd = Eigen::MatrixXd;
 }  // namespace plumb::eigen_instantiations
 
-// `Prefix` is `extern template` (the declarations below) or `template` (the one definition).
+// `Prefix` is `extern template` (the declarations below) or `template` (the one definition). The
+// symmetric eigen solvers as whole classes (computeDirect() too); LDLT / LLT only compute(), the rest
+// of those classes (rcond(), ...) is small and stays inline.
 #define PLUMB_EIGEN_SYMMETRIC_EIGEN(Prefix, M)                                     \
   Prefix class Eigen::SelfAdjointEigenSolver<plumb::eigen_instantiations::M>;      \
   Prefix Eigen::SelfAdjointEigenSolver<plumb::eigen_instantiations::M>&            \
   Eigen::SelfAdjointEigenSolver<plumb::eigen_instantiations::M>::compute(          \
       const Eigen::EigenBase<plumb::eigen_instantiations::M>&, int);
 #define PLUMB_EIGEN_CHOLESKY(Prefix, Solver, M)                                    \
-  Prefix class Eigen::Solver<plumb::eigen_instantiations::M>;                      \
   Prefix Eigen::Solver<plumb::eigen_instantiations::M>&                            \
   Eigen::Solver<plumb::eigen_instantiations::M>::compute(const Eigen::EigenBase<plumb::eigen_instantiations::M>&);
 #define PLUMB_EIGEN_INSTANTIATIONS(Prefix)     \
