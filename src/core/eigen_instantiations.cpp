@@ -10,3 +10,4 @@
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #endif
 PLUMB_EIGEN_INSTANTIATIONS(template)
+PLUMB_EIGEN_TRIDIAGONAL_INSTANTIATIONS(template)

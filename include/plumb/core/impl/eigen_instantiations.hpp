@@ -39,6 +39,25 @@ using MatrixXd = Eigen::MatrixXd;
   PLUMB_EIGEN_CHOLESKY(Prefix, LLT, Matrix15d)  \
   PLUMB_EIGEN_CHOLESKY(Prefix, LLT, MatrixXd)
 
+// The two halves of SelfAdjointEigenSolver<M>::compute(), for solvers built from an expression
+// (`es(H / n)`, `es(D * H * D)`), whose compute<expression> the declarations above do not cover.
+// Eigen internals: declared for the Eigen 3.4 signatures only.
+#define PLUMB_EIGEN_TRIDIAGONAL(Prefix, N)                                                       \
+  Prefix void Eigen::internal::tridiagonalization_inplace(                                       \
+      Eigen::Matrix<double, N, N>&, Eigen::Matrix<double, N, 1>&, Eigen::Matrix<double, N - 1, 1>&, \
+      Eigen::Matrix<double, N - 1, 1>&, bool);                                                   \
+  Prefix Eigen::ComputationInfo Eigen::internal::computeFromTridiagonal_impl(                    \
+      Eigen::Matrix<double, N, 1>&, Eigen::Matrix<double, N - 1, 1>&, const Eigen::Index, bool,    \
+      Eigen::Matrix<double, N, N>&);
+#if EIGEN_VERSION_AT_LEAST(3, 4, 0) && !EIGEN_VERSION_AT_LEAST(3, 4, 90)
+#define PLUMB_EIGEN_TRIDIAGONAL_INSTANTIATIONS(Prefix) \
+  PLUMB_EIGEN_TRIDIAGONAL(Prefix, 4)                  \
+  PLUMB_EIGEN_TRIDIAGONAL(Prefix, 6)
+#else
+#define PLUMB_EIGEN_TRIDIAGONAL_INSTANTIATIONS(Prefix)
+#endif
+
 #if defined(PLUMB_EIGEN_EXTERN_TEMPLATES) && !defined(PLUMB_EIGEN_INSTANTIATIONS_DEFINE)
 PLUMB_EIGEN_INSTANTIATIONS(extern template)
+PLUMB_EIGEN_TRIDIAGONAL_INSTANTIATIONS(extern template)
 #endif
