@@ -58,3 +58,6 @@ std::size_t compute_normals(PointCloud& cloud, const NormalSettings& settings = 
 }  // namespace plumb
 
 #include "plumb/features/impl/normals_impl.hpp"
+
+// Within plumb's build tree the Eigen decompositions above are compiled once, in libplumb.
+#include "plumb/core/impl/eigen_instantiations.hpp"

@@ -164,3 +164,6 @@ class ImuPreintegration {
 }  // namespace plumb
 
 #include "plumb/imu/impl/preintegration_impl.hpp"
+
+// Within plumb's build tree the Eigen decompositions above are compiled once, in libplumb.
+#include "plumb/core/impl/eigen_instantiations.hpp"

@@ -146,3 +146,6 @@ inline LoamResult loam_icp_scan_to_scan(const PointCloud& prev, const KdTree3f& 
 }  // namespace plumb
 
 #include "plumb/loam/impl/odometry_impl.hpp"
+
+// Within plumb's build tree the Eigen decompositions above are compiled once, in libplumb.
+#include "plumb/core/impl/eigen_instantiations.hpp"

@@ -179,3 +179,6 @@ LeastSquaresResult solve_least_squares(LeastSquaresProblem& problem, const Least
 }  // namespace plumb
 
 #include "plumb/optim/impl/least_squares_impl.hpp"
+
+// Within plumb's build tree the Eigen decompositions above are compiled once, in libplumb.
+#include "plumb/core/impl/eigen_instantiations.hpp"

@@ -304,3 +304,18 @@ std::vector<std::uint32_t> feature_knn(const std::vector<std::array<float, N>>& 
 }
 
 }  // namespace plumb
+
+#ifndef PLUMB_HEADER_ONLY
+namespace plumb {
+// The FPFH (33-D) tree is compiled once, in libplumb (src/registration/feature_index.cpp): its
+// 33 x 33 fixed-size eigen decomposition alone costs every including file many seconds to compile.
+extern template class FeatureKdTree<33>;
+extern template std::vector<std::uint32_t> feature_knn<33>(const std::vector<std::array<float, 33>>&,
+                                                           const std::vector<std::size_t>&,
+                                                           const std::vector<std::array<float, 33>>&,
+                                                           const std::vector<std::size_t>&, std::size_t);
+}  // namespace plumb
+#endif
+
+// Within plumb's build tree the Eigen decompositions above are compiled once, in libplumb.
+#include "plumb/core/impl/eigen_instantiations.hpp"

@@ -81,3 +81,6 @@ IcpResult align_icp(const PointCloud& source, const PointCloud& target,
 }  // namespace plumb
 
 #include "plumb/registration/impl/icp_impl.hpp"
+
+// Within plumb's build tree the Eigen decompositions above are compiled once, in libplumb.
+#include "plumb/core/impl/eigen_instantiations.hpp"

@@ -104,3 +104,6 @@ bool fit_plane_least_squares(const std::vector<Vector3f>& points, const std::vec
 }  // namespace plumb
 
 #include "plumb/segmentation/impl/plane_ransac_impl.hpp"
+
+// Within plumb's build tree the Eigen decompositions above are compiled once, in libplumb.
+#include "plumb/core/impl/eigen_instantiations.hpp"
