@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // `plumb simulate MODEL -o DIR [--scenario indoor|site] [--lidar NAME|FILE.json] [--seed S] [--loops N]
-// [--length M] [--clutter F] [--as-built-sigma M] [--imu mems|2deg_h] [--threads N] [--json]`:
+// [--length M] [--clutter F] [--as-built-sigma M] [--as-built-deg D] [--imu mems|2deg_h] [--threads N] [--json]`:
 // a robot drives through (or around) an IFC building; LiDAR frames, wheel encoders, wheel odometry,
 // IMU and ground truth are written as a frame dump directory.
 
@@ -38,6 +38,7 @@ struct SimulateOptions {
   double length = 0.0;
   double clutter = 1.0;
   double as_built_sigma = 0.01;
+  double as_built_deg = 0.2;
   int storey = -1;
   int threads = 1;
   bool overwrite = false;
@@ -103,6 +104,7 @@ void run_simulate(const SimulateOptions& o) {
   s.storey = o.storey;
   s.world.clutter = o.clutter;
   s.world.as_built_sigma_m = o.as_built_sigma;
+  s.world.as_built_sigma_rad = o.as_built_deg * M_PI / 180.0;
   s.num_threads = o.threads;
   s.dump.overwrite = o.overwrite;
   if (o.compressed) s.dump.encoding = io::PcdEncoding::kBinaryCompressed;
@@ -162,6 +164,9 @@ void register_simulate_command(CLI::App& app) {
   cmd->add_option("--clutter", opts->clutter, "Furniture density factor, 0 = none (default 1)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--as-built-sigma", opts->as_built_sigma, "As-built element shift, std dev [m] (default 0.01)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--as-built-deg", opts->as_built_deg,
+                  "As-built element rotation about each axis, std dev [deg] (default 0.2; 0 and --as-built-sigma 0 = the exact model)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--threads", opts->threads, "Frames simulated in parallel (default 1; same output for any)")
       ->check(CLI::Range(1, 256));

@@ -146,6 +146,8 @@ void BimOdometry::correct(const PointCloud& lidar_frame, BimFrameResult& out) {
   out.seconds_icp = seconds_since(t1);
   if (icp.status != Status::kOk && icp.status != Status::kNotConverged) return;
   if (icp.overlap < settings_.min_anchor_overlap || icp.num_inliers < settings_.min_anchor_inliers) return;
+  out.registered = true;
+  out.T_bim_base_registered = icp.T_target_source * settings_.T_base_lidar.inverse();
 
   // Information of the result from its final correspondences, first about the robot's position c
   // (so the rank test compares like with like), then moved to the world-origin left perturbation.
@@ -190,7 +192,7 @@ void BimOdometry::correct(const PointCloud& lidar_frame, BimFrameResult& out) {
   Eigen::Isometry3d T_c = Eigen::Isometry3d::Identity();
   T_c.translation() = c;
   const Matrix6d info_world = body_to_world_information(T_c, 0.5 * (H_kept + H_kept.transpose()));
-  out.anchor = composer_.add_anchor(T * settings_.T_base_lidar.inverse(), info_world);
+  out.anchor = composer_.add_anchor(out.T_bim_base_registered, info_world);
 }
 
 }  // namespace plumb

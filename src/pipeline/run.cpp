@@ -201,6 +201,15 @@ RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& 
     report.max_error_wheel = max_error(report.wheel);
     report.max_error_lidar = max_error(report.lidar);
     report.max_error_bim = max_error(report.bim);
+    double sum_sq = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!report.frames[i].registered) continue;
+      const double e = horizontal_error(report.frames[i].T_bim_base_registered, gt.poses[i]);
+      sum_sq += e * e;
+      report.registration_error_max = std::max(report.registration_error_max, e);
+      ++report.registrations;
+    }
+    if (report.registrations > 0) report.registration_error_rms = std::sqrt(sum_sq / static_cast<double>(report.registrations));
   }
   return report;
 }

@@ -84,6 +84,10 @@ struct BimFrameResult {
   std::size_t icp_inliers = 0;
   std::size_t num_key_points = 0;
   int anchor_dof = 0;                   ///< rank of the anchor information (6 = fully constrained)
+  /// The key points' registration passed the overlap and inlier gates: T_bim_base_registered is the
+  /// base pose the BIM alone gives (what the anchor measured, before fusion with the front end).
+  bool registered = false;
+  Eigen::Isometry3d T_bim_base_registered = Eigen::Isometry3d::Identity();
   AnchorResult anchor;                  ///< the composer's decision (kIgnored when no anchor was made)
   double seconds_front_end = 0.0, seconds_segment = 0.0, seconds_icp = 0.0, seconds_total = 0.0;
 };

@@ -70,6 +70,11 @@ struct RunReport {
   double path_length = 0.0;             ///< [m]
   double ape_rmse_wheel = 0.0, ape_rmse_lidar = 0.0, ape_rmse_bim = 0.0;  ///< horizontal, no alignment [m]
   double max_error_wheel = 0.0, max_error_lidar = 0.0, max_error_bim = 0.0;  ///< largest horizontal error [m]
+  /// Horizontal error of the BIM registrations alone (BimFrameResult::T_bim_base_registered) against
+  /// the truth, over the frames that registered: how well the model itself places the robot. With
+  /// as-built deviations (the simulator's walls are shifted and turned) this bounds the corrected pose.
+  std::size_t registrations = 0;
+  double registration_error_rms = 0.0, registration_error_max = 0.0;  ///< [m]
 };
 
 /// @brief The BIM cloud a LiDAR is registered to: the model's surfaces sampled every `spacing`
