@@ -44,6 +44,10 @@ nlohmann::json run_report_json(const RunReport& r) {
   j["seconds_localize"] = r.seconds_localize;
   j["seconds_frames"] = r.seconds_frames;
   j["frames_per_second"] = r.frames_per_second;
+  j["mean_seconds_per_frame"] = {{"front_end", r.mean_seconds_front_end},
+                                 {"segment", r.mean_seconds_segment},
+                                 {"icp", r.mean_seconds_icp},
+                                 {"process", r.mean_seconds_process}};
   if (r.has_ground_truth) {
     j["initial_error"] = {{"xy", r.initial_error_xy}, {"yaw_deg", r.initial_error_yaw_deg}};
     j["path_length"] = r.path_length;
@@ -105,6 +109,11 @@ void print_run_summary(const RunReport& r) {
   std::printf("%zu frames, %.1f frames/s; anchors %zu accepted / %zu rejected of %zu attempted; %zu fallbacks\n",
               r.frames.size(), r.frames_per_second, r.anchors_accepted, r.anchors_rejected, r.anchors_attempted,
               r.fallbacks);
+  if (r.mean_seconds_process > 0.0) {
+    std::printf("per frame: %.1f ms in BimOdometry (front end %.1f, key points %.1f, BIM ICP %.1f) = %.1f frames/s without reading\n",
+                r.mean_seconds_process * 1e3, r.mean_seconds_front_end * 1e3, r.mean_seconds_segment * 1e3,
+                r.mean_seconds_icp * 1e3, 1.0 / r.mean_seconds_process);
+  }
   if (r.localized) {
     std::printf("initial localization: %s in %.2f s (score %.2f, second %.2f, overlap %.2f, rmse %.1f mm)\n",
                 to_string(r.localization_status), r.seconds_localize, r.localization.score, r.localization.second_score,

@@ -164,6 +164,12 @@ RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& 
   }
   report.seconds_frames = seconds_since(t_frames);
   report.frames_per_second = report.seconds_frames > 0 ? static_cast<double>(n) / report.seconds_frames : 0.0;
+  for (const BimFrameResult& f : report.frames) {
+    report.mean_seconds_front_end += f.seconds_front_end / static_cast<double>(n);
+    report.mean_seconds_segment += f.seconds_segment / static_cast<double>(n);
+    report.mean_seconds_icp += f.seconds_icp / static_cast<double>(n);
+    report.mean_seconds_process += f.seconds_total / static_cast<double>(n);
+  }
 
   if (report.has_ground_truth) {
     std::vector<double> dist(n, 0.0);

@@ -62,7 +62,9 @@ struct RunReport {
   std::size_t anchors_accepted = 0, anchors_rejected = 0, anchors_attempted = 0;
   std::size_t fallbacks = 0;            ///< front-end frames that fell back to the wheel prior
   double seconds_localize = 0.0, seconds_frames = 0.0;
-  double frames_per_second = 0.0;
+  double frames_per_second = 0.0;       ///< frames / seconds_frames (reading and deskewing included)
+  /// Mean per-frame time of BimOdometry::process() and its parts [s] (reading frames excluded).
+  double mean_seconds_front_end = 0.0, mean_seconds_segment = 0.0, mean_seconds_icp = 0.0, mean_seconds_process = 0.0;
   // With ground truth (gt.tum):
   bool has_ground_truth = false;
   double initial_error_xy = 0.0, initial_error_yaw_deg = 0.0;
