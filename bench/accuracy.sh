@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
+# Accuracy suite of the BIM-corrected odometry (issue 8): for each building, `plumb simulate` with the
+# defaults (rfans32, two loops of the indoor route, as-built deviations σ 1 cm / 0.2°, furniture,
+# range noise, wheel errors, motion distortion), then `plumb run` with the first frame localized in
+# the building, and the seed's Table 2 against the exact ground truth as one markdown table.
+#
+# usage: bash bench/accuracy.sh [PLUMB_BINARY] [OUT_DIR]
+#   PLUMB_BINARY  default build/rel/examples/plumb (a Release build: `cmake --build build/rel`)
+#   OUT_DIR       default /tmp/plumb_accuracy (dumps and run outputs stay there for inspection)
+# Buildings: the demo office (examples/data) and AC20-FZK-Haus and duplex from PLUMB_DATA_DIR
+# (default ../shared/data). duplex starts from the surveyed pose (gt.tum's first pose): it is two
+# mirrored flats, and BimLocalizer does not find this dump's first frame even with a start hint (open
+# issue: no candidate is scored within 0.3 m of the true start although the floor plan is free there).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+plumb="${1:-build/rel/examples/plumb}"
+out="${2:-/tmp/plumb_accuracy}"
+data="${PLUMB_DATA_DIR:-../shared/data}"
+command -v python3 >/dev/null || { echo "accuracy.sh: needs python3 (apt-get install python3)" >&2; exit 1; }
+[ -x "$plumb" ] || { echo "accuracy.sh: $plumb not found (build it first)" >&2; exit 1; }
+mkdir -p "$out"
+
+run_building() {  # name model [surveyed]
+  local name="$1" model="$2" start="${3:-}"
+  "$plumb" simulate "$model" -o "$out/$name/dump" --threads "$(nproc)" --overwrite --json > "$out/$name/simulate.json"
+  local extra=()
+  if [ "$start" = surveyed ]; then extra=(--gt-start); fi
+  "$plumb" run "$out/$name/dump" --bim "$model" -o "$out/$name/run" --json "${extra[@]}" > "$out/$name/report.json" || true
+}
+
+for name in demo_office AC20-FZK-Haus duplex; do mkdir -p "$out/$name"; done
+run_building demo_office examples/data/demo_office.ifc
+run_building AC20-FZK-Haus "$data/ifc/buildings/AC20-FZK-Haus.ifc"
+run_building duplex "$data/ifc/buildings/duplex.ifc" surveyed
+
+python3 - "$out" <<'PY'
+import json, sys
+out = sys.argv[1]
+print("| building | path | start | start error | end error wheel / LiDAR / BIM | max error LiDAR / BIM | APE LiDAR / BIM | BIM registration alone rms / max | frames/s (process) |")
+print("|---|---|---|---|---|---|---|---|---|")
+for name in ("demo_office", "AC20-FZK-Haus", "duplex"):
+    try:
+        r = json.load(open(f"{out}/{name}/report.json"))
+    except (OSError, ValueError):
+        print(f"| {name} | run failed | | | | | | | |"); continue
+    if r.get("localization_status") != "ok":
+        print(f"| {name} | – | not localized: {r.get('localization_status')} | | | | | | |"); continue
+    end = r["table"][-1]
+    pct = lambda m: f"{100 * end[m]['error'] / end['distance']:.3f} %"
+    start = "localized" if r["localized"] else "surveyed"
+    reg = r["registration_error_xy"]
+    print(f"| {name} | {end['distance']:.1f} m | {start} | {1000 * r['initial_error']['xy']:.1f} mm |"
+          f" {pct('wheel')} / {pct('lidar')} / {pct('bim')} |"
+          f" {100 * r['max_error_xy']['lidar']:.1f} / {100 * r['max_error_xy']['bim']:.1f} cm |"
+          f" {100 * r['ape_rmse_xy']['lidar']:.1f} / {100 * r['ape_rmse_xy']['bim']:.1f} cm |"
+          f" {100 * reg['rms']:.1f} / {100 * reg['max']:.1f} cm | {1 / r['mean_seconds_per_frame']['process']:.0f} |")
+PY
