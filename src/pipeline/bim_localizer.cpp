@@ -149,7 +149,18 @@ BimLocalizer::BimLocalizer(const bim::BimMesh& mesh, const PointCloud& bim_cloud
     }
     m.index = k;
     m.floor_z = grid->floor_z;
-    m.map = std::make_unique<CorrelativeMap2D>(walls, settings_.map,
+    // Search every free floor cell, also those farther than the map margin from any wall (a
+    // terrace, a hall): the map's translations cover the free floor's box.
+    CorrelativeMapSettings map_settings = settings_.map;
+    for (int iy = 0; iy < grid->height; ++iy) {
+      for (int ix = 0; ix < grid->width; ++ix) {
+        if (grid->at(ix, iy) != bim::CellState::kFree) continue;
+        const Vector2d corner = grid->origin + Vector2d(ix, iy) * grid->resolution;
+        map_settings.bounds.extend(corner);
+        map_settings.bounds.extend(Vector2d(corner + Vector2d::Constant(grid->resolution)));
+      }
+    }
+    m.map = std::make_unique<CorrelativeMap2D>(walls, map_settings,
                                                [grid](const Vector2d& t) { return grid->is_free(t); }, wall_normals);
     maps_.push_back(std::move(m));
   }

@@ -53,6 +53,11 @@ CorrelativeMap2D::CorrelativeMap2D(const std::vector<Vector2d>& map_points, cons
     ++finite;
   }
   PLUMB_CHECK(finite > 0, "CorrelativeMap2D: no finite map point");
+  if (!s.bounds.isEmpty()) {
+    PLUMB_CHECK(s.bounds.min().allFinite() && s.bounds.max().allFinite(), "CorrelativeMap2D: bounds are not finite");
+    lo = lo.cwiseMin(s.bounds.min());
+    hi = hi.cwiseMax(s.bounds.max());
+  }
   const double r = s.resolution;
   origin_ = lo - Vector2d::Constant(s.margin);
   const Vector2d extent = (hi - lo + Vector2d::Constant(2.0 * s.margin)) / r;

@@ -165,4 +165,33 @@ TEST(CorrelativeMatchTest, HintRegionAndBadInput) {
   EXPECT_THROW(map.see_through(scan, truth, Vector2d::Zero(), -1.0), plumb::Error);
 }
 
+TEST(CorrelativeMatchTest, BoundsReachPositionsFarFromEveryWall) {
+  // One long wall; the robot stands 3 m in front of it, beyond the 1 m margin around the map points
+  // (a terrace in front of a facade). Without bounds its position is off the grid and cannot be
+  // found; with the free area as bounds it is.
+  std::vector<Vector2d> pts;
+  for (int i = 0; i <= 400; ++i) pts.emplace_back(0.02 * i, 0.0);
+  for (int i = 1; i <= 50; ++i) pts.emplace_back(0.0, -0.02 * i);  // a corner, so x is fixed too
+  const Pose2 truth{3.0, 3.0, 0.4};
+  std::vector<Vector2d> scan;
+  for (const Vector2d& p : pts) scan.push_back(truth.ominus() * p);
+  CorrelativeMapSettings ms;
+  ms.resolution = 0.1;
+  ms.levels = 5;
+  CorrelativeSearchSettings ss;
+  ss.region_center = Vector2d(3.0, 3.0);
+  ss.region_radius = 0.5;
+  EXPECT_EQ(CorrelativeMap2D(pts, ms).match(scan, ss).status, plumb::Status::kRejected);
+  ms.bounds.extend(Vector2d(-1.0, -1.0));
+  ms.bounds.extend(Vector2d(9.0, 5.0));
+  const CorrelativeMap2D map(pts, ms);
+  const plumb::CorrelativeResult r = map.match(scan, ss);
+  ASSERT_EQ(r.status, plumb::Status::kOk);
+  EXPECT_LT((Vector2d(r.pose.x, r.pose.y) - Vector2d(truth.x, truth.y)).norm(), 0.15);
+  EXPECT_LT(std::abs(std::remainder(r.pose.theta - truth.theta, 2.0 * M_PI)), 0.05);
+  CorrelativeMapSettings bad = ms;
+  bad.bounds = Eigen::AlignedBox2d(Vector2d(std::nan(""), 0.0), Vector2d(1.0, 1.0));
+  EXPECT_THROW(CorrelativeMap2D(pts, bad), plumb::Error);
+}
+
 }  // namespace

@@ -18,6 +18,8 @@
 #include <optional>
 #include <vector>
 
+#include <Eigen/Geometry>
+
 #include "plumb/core/pose2.hpp"
 #include "plumb/core/status.hpp"
 #include "plumb/core/types.hpp"
@@ -32,6 +34,10 @@ struct CorrelativeMapSettings {
   double sigma = 0.1;
   int levels = 8;            ///< pyramid depth: branch windows of 1, 2, 4 ... 2^(levels-1) cells, 1..15
   double margin = 1.0;       ///< grid margin around the map points [m], >= 0
+  /// Translations are searched over the map points' box plus margin, grown to cover this box too
+  /// (e.g. the free floor: a robot can stand farther than `margin` from every map point, on a
+  /// terrace or in a hall). Empty (the default): the map points' box alone.
+  Eigen::AlignedBox2d bounds;
   std::size_t max_cells = std::size_t{1} << 26;  ///< larger grids throw (a unit error, a stray point)
   /// With map normals: the likelihood is kept per normal direction in this many sectors, and a scan
   /// point with a normal only meets map points facing the same way (within 1.5 sectors), so a
