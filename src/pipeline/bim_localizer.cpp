@@ -89,6 +89,9 @@ void check_settings(const BimLocalizerSettings& s) {
               "BimLocalizer: ambiguity_distance must be > 0 and ambiguity_angle >= 0");
   PLUMB_CHECK(std::isfinite(s.ambiguity_overlap_margin) && s.ambiguity_overlap_margin >= 0.0,
               "BimLocalizer: ambiguity_overlap_margin = " << s.ambiguity_overlap_margin << " must be >= 0");
+  PLUMB_CHECK(std::isfinite(s.min_score_when_ambiguous) && s.min_score_when_ambiguous >= 0.0 &&
+                  s.min_score_when_ambiguous <= 1.0,
+              "BimLocalizer: min_score_when_ambiguous = " << s.min_score_when_ambiguous << " must be in [0, 1]");
   PLUMB_CHECK(std::isfinite(s.max_see_through) && s.max_see_through >= 0.0 && std::isfinite(s.see_through_margin) &&
                   s.see_through_margin >= 0.0,
               "BimLocalizer: max_see_through and see_through_margin must be >= 0");
@@ -267,7 +270,8 @@ BimLocalization BimLocalizer::localize(const PointCloud& frame, const Eigen::Iso
       out.storey = second_map->index;
     }
     out.second_overlap = other.overlap;
-    out.ambiguous = out.fine.overlap - other.overlap < settings_.ambiguity_overlap_margin;
+    out.ambiguous = out.fine.overlap - other.overlap < settings_.ambiguity_overlap_margin ||
+                    out.score < settings_.min_score_when_ambiguous;
   }
   out.T_bim_base = out.fine.T_target_source * T_base_lidar.inverse();
   out.seconds_fine = seconds_since(t1);

@@ -206,6 +206,9 @@ TEST(BimLocalizerTest, BadInputGivesStatusOrClearError) {
   s.slice_min = 2.0;
   s.slice_max = 1.0;
   EXPECT_THROW(BimLocalizer(*office.mesh, plumb::sample_bim_cloud(*office.mesh, 0.2), s), plumb::Error);
+  plumb::BimLocalizerSettings weak;
+  weak.min_score_when_ambiguous = 1.5;
+  EXPECT_THROW(BimLocalizer(*office.mesh, plumb::sample_bim_cloud(*office.mesh, 0.2), weak), plumb::Error);
 }
 
 }  // namespace

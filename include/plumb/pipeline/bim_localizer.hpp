@@ -75,6 +75,10 @@ struct BimLocalizerSettings {
   /// is higher by at least this much wins (ceiling heights, sills, stairs tell storeys and mirror
   /// images apart); otherwise the result is ambiguous.
   double ambiguity_overlap_margin = 0.05;
+  /// When the 3D overlap had to decide between two places, the winner's 2D score must reach this
+  /// too (a weak 2D match decided by overlap put the robot 25 m off on a duplex terrace); else
+  /// the result is ambiguous.
+  double min_score_when_ambiguous = 0.5;
   /// Fine stage (refine_localization): BIM cloud and frame at fine_voxel_size, point-to-plane ICP.
   LocalizeSettings fine = default_localizer_fine();
   double max_refine_shift = 0.5;   ///< gate: ICP moving the base farther than this from the 2D pose [m]
