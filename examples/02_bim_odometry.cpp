@@ -8,26 +8,14 @@
 // the README); on a robot they come from the driver.
 //
 // usage: plumb_example_02_bim_odometry MODEL.ifc DUMP_DIR
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <exception>
 #include <memory>
-#include <vector>
 
 #include <plumb/plumb.hpp>
 
 namespace {
-
-/// Wheel-odometry pose at time t, linearly interpolated between the recorded samples.
-plumb::Pose2 odometry_at(const std::vector<plumb::io::OdomSample>& odom, double t) {
-  const auto after = std::lower_bound(odom.begin(), odom.end(), t,
-                                      [](const plumb::io::OdomSample& s, double v) { return s.stamp < v; });
-  if (after == odom.begin()) return odom.front().pose;
-  if (after == odom.end()) return odom.back().pose;
-  const auto before = after - 1;
-  return plumb::io::interpolate_pose2(before->pose, after->pose, (t - before->stamp) / (after->stamp - before->stamp));
-}
 
 double yaw_deg(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)) * 180.0 / M_PI; }
 
@@ -45,11 +33,11 @@ int main(int argc, char** argv) {
     const auto bim_cloud = std::make_shared<const PointCloud>(sample_bim_cloud(mesh, 0.05));
     const io::FrameDumpReader dump(argv[2]);
     const Eigen::Isometry3d T_base_lidar = dump.meta().T_base_lidar;
-    const std::vector<io::OdomSample> odom = dump.odometry();
+    const OdometryInterpolator odom(dump.odometry());  // wheel odometry at any time
     auto read_frame = [&](std::size_t i) {
       PointCloud frame = dump.frame(i);
       deskew_frame(frame, dump.stamp(i), T_base_lidar,
-                   [&](double t) { return odometry_at(odom, t).to_isometry(); });
+                   [&](double t) { return odom.at(t).to_isometry(); });
       return frame;
     };
 
@@ -69,7 +57,7 @@ int main(int argc, char** argv) {
     settings.T_base_lidar = T_base_lidar;
     BimOdometry odometry(bim_cloud, start.T_bim_base, settings);
     for (std::size_t i = 0; i < dump.num_frames(); ++i) {
-      const BimFrameResult r = odometry.process(read_frame(i), dump.stamp(i), odometry_at(odom, dump.stamp(i)));
+      const BimFrameResult r = odometry.process(read_frame(i), dump.stamp(i), odom.at(dump.stamp(i)));
       if (i % 50 == 0 || i + 1 == dump.num_frames()) {
         std::printf("%s %zu: t %.2f s, x %.3f m, y %.3f m, yaw %.2f deg, BIM anchor %s\n",
                     i + 1 == dump.num_frames() ? "last frame" : "frame", i, r.stamp, r.T_bim_base.translation().x(),

@@ -32,14 +32,14 @@ inline std::string read_text(const std::string& path) {
 
 inline std::string cli_binary() { return std::string(PLUMB_BINARY_DIR) + "/examples/plumb"; }
 
-/// @brief Run `plumb ARGS` (ARGS quoted by the caller) with per-test output files, since ctest may
-/// run the tests of one binary in parallel.
-inline RunResult run_cli(const std::string& args) {
+/// @brief Run the built program PATH with ARGS (quoted by the caller), with per-test output files,
+/// since ctest may run the tests of one binary in parallel.
+inline RunResult run_program(const std::string& path, const std::string& args) {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
   const std::string name = std::string(info->test_suite_name()) + "_" + info->name();
   const std::string out = temp_path("cli_" + name + "_stdout.txt");
   const std::string err = temp_path("cli_" + name + "_stderr.txt");
-  const std::string command = "'" + cli_binary() + "' " + args + " >'" + out + "' 2>'" + err + "'";
+  const std::string command = "'" + path + "' " + args + " >'" + out + "' 2>'" + err + "'";
   const int status = std::system(command.c_str());
   RunResult r;
   if (status != -1 && WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
@@ -47,6 +47,9 @@ inline RunResult run_cli(const std::string& args) {
   r.err = read_text(err);
   return r;
 }
+
+/// @brief Run `plumb ARGS` (ARGS quoted by the caller).
+inline RunResult run_cli(const std::string& args) { return run_program(cli_binary(), args); }
 
 /// @brief The number after "key": inside the JSON object that is the value of "object" (the whole
 /// text when `object` is empty). Enough for flat objects; NaN when absent.

@@ -19,26 +19,6 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-/// Wheel odometry pose at time t by linear interpolation (clamped to the first / last sample).
-class OdometryInterpolator {
- public:
-  explicit OdometryInterpolator(std::vector<io::OdomSample> samples) : s_(std::move(samples)) {
-    PLUMB_CHECK(!s_.empty(), "run_bim_odometry: odom.csv holds no sample");
-  }
-  Pose2 at(double t) const {
-    if (t <= s_.front().stamp) return s_.front().pose;
-    if (t >= s_.back().stamp) return s_.back().pose;
-    const auto it = std::lower_bound(s_.begin(), s_.end(), t,
-                                     [](const io::OdomSample& a, double v) { return a.stamp < v; });
-    const io::OdomSample& b = *it;
-    const io::OdomSample& a = *(it - 1);
-    return io::interpolate_pose2(a.pose, b.pose, (t - a.stamp) / (b.stamp - a.stamp));
-  }
-
- private:
-  std::vector<io::OdomSample> s_;
-};
-
 double yaw_of(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); }
 
 double horizontal_error(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
@@ -46,6 +26,22 @@ double horizontal_error(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) 
 }
 
 }  // namespace
+
+OdometryInterpolator::OdometryInterpolator(std::vector<io::OdomSample> samples) : s_(std::move(samples)) {
+  PLUMB_CHECK(!s_.empty(), "OdometryInterpolator: no odometry sample (odom.csv is empty)");
+  for (std::size_t i = 1; i < s_.size(); ++i) {
+    PLUMB_CHECK(s_[i].stamp > s_[i - 1].stamp, "OdometryInterpolator: stamps must increase (sample " << i << ")");
+  }
+}
+
+Pose2 OdometryInterpolator::at(double t) const {
+  if (t <= s_.front().stamp) return s_.front().pose;
+  if (t >= s_.back().stamp) return s_.back().pose;
+  const auto it = std::lower_bound(s_.begin(), s_.end(), t, [](const io::OdomSample& a, double v) { return a.stamp < v; });
+  const io::OdomSample& b = *it;
+  const io::OdomSample& a = *(it - 1);
+  return io::interpolate_pose2(a.pose, b.pose, (t - a.stamp) / (b.stamp - a.stamp));
+}
 
 void deskew_frame(PointCloud& frame, double stamp, const Eigen::Isometry3d& T_base_lidar,
                   const std::function<Eigen::Isometry3d(double)>& T_ref_base) {

@@ -21,18 +21,9 @@ namespace {
 using test::CliTest;
 using test::run_cli;
 
-/// Run examples/NN_name (built next to the CLI) with ARGS; stdout and stderr captured.
+/// Run examples/NN_name (built next to the CLI) with ARGS.
 test::RunResult run_example(const std::string& name, const std::string& args) {
-  const std::string out = test::temp_path("example_" + name + "_" + std::to_string(::getpid()) + "_stdout.txt");
-  const std::string err = test::temp_path("example_" + name + "_" + std::to_string(::getpid()) + "_stderr.txt");
-  const std::string command = "'" + std::string(PLUMB_BINARY_DIR) + "/examples/plumb_example_" + name + "' " + args +
-                              " >'" + out + "' 2>'" + err + "'";
-  const int status = std::system(command.c_str());
-  test::RunResult r;
-  if (status != -1 && WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
-  r.out = test::read_text(out);
-  r.err = test::read_text(err);
-  return r;
+  return test::run_program(std::string(PLUMB_BINARY_DIR) + "/examples/plumb_example_" + name, args);
 }
 
 TEST_F(CliTest, Example01CloudBasicsRuns) {

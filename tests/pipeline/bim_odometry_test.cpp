@@ -112,6 +112,20 @@ TEST(DeskewTest, UndoesAConstantMotion) {
                plumb::Error);
 }
 
+TEST(OdometryInterpolatorTest, InterpolatesClampsAndRejectsBadSamples) {
+  std::vector<plumb::io::OdomSample> samples(2);
+  samples[0].stamp = 1.0;
+  samples[1].stamp = 2.0;
+  samples[1].pose = plumb::Pose2{2.0, 0.0, 0.0};
+  const plumb::OdometryInterpolator odom(samples);
+  EXPECT_NEAR(odom.at(1.25).x, 0.5, 1e-12);
+  EXPECT_NEAR(odom.at(0.0).x, 0.0, 1e-12);   // before the first sample: the first
+  EXPECT_NEAR(odom.at(9.0).x, 2.0, 1e-12);   // after the last: the last
+  EXPECT_THROW(plumb::OdometryInterpolator({}), plumb::Error);
+  samples[1].stamp = 1.0;  // not increasing
+  EXPECT_THROW(plumb::OdometryInterpolator{samples}, plumb::Error);
+}
+
 TEST(BimOdometryTest, BadInputThrows) {
   auto empty = std::make_shared<plumb::PointCloud>();
   EXPECT_THROW(plumb::BimOdometry(empty, Eigen::Isometry3d::Identity()), plumb::Error);

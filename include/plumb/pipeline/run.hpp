@@ -79,6 +79,18 @@ struct RunReport {
   double registration_error_rms = 0.0, registration_error_max = 0.0;  ///< [m]
 };
 
+/// @brief Wheel-odometry pose at any time, linearly interpolated in SE(2) between recorded samples
+///        (clamped to the first / last one): the prior and the deskewing motion of each frame.
+class OdometryInterpolator {
+ public:
+  /// @throws plumb::Error when there is no sample or the stamps do not increase
+  explicit OdometryInterpolator(std::vector<io::OdomSample> samples);
+  Pose2 at(double t) const;
+
+ private:
+  std::vector<io::OdomSample> s_;
+};
+
 /// @brief The BIM cloud a LiDAR is registered to: the model's surfaces sampled every `spacing`
 ///        metres with their face normals, skipping what a LiDAR does not see in the building
 ///        (doors are open, windows transmit, spaces and opening volumes are not surfaces, and
