@@ -254,6 +254,54 @@ TEST(SacIaTest, EarlyTerminationStopsSoonerOnEasyCase) {
   EXPECT_LE(full.score, fast.score);
 }
 
+// The similarity-weighted draw (default) against the seed's uniform draw among the k candidates.
+// With exact twins the closest candidate is always right: the weighted draw finds an all-correct
+// sample at once. With noisy signatures the closest one is often wrong: both still find the
+// motion. The winner's inlier statistics (gathered while scoring) equal a recount.
+TEST(SacIaTest, SimilarityWeightedDrawFindsTheMotionSooner) {
+  PLUMB_REQUIRE_DATA(p4, "cloud3d/pcl_test/bun4.pcd");
+  const EasyCase e = easy_case();
+  const KdTree3f tree(e.target);
+  Rng noise(7);
+  std::vector<FpfhSignature> noisy = e.features;
+  for (FpfhSignature& f : noisy)
+    for (float& v : f) v = std::max(0.0f, v * static_cast<float>(1.0 + 0.3 * noise.normal()));
+  for (bool exact : {true, false}) {
+    const std::vector<FpfhSignature>& target_features = exact ? e.features : noisy;
+    SacIaSettings s = bunny_settings();
+    s.max_iterations = 5000;
+    s.similarity_weighted = false;
+    const SacIaResult uniform = align_sac_ia(e.source, e.features, e.target, target_features, tree, s);
+    s.similarity_weighted = true;
+    const SacIaResult weighted = align_sac_ia(e.source, e.features, e.target, target_features, tree, s);
+    std::printf("%s twins: uniform %d iterations, weighted %d\n", exact ? "exact" : "noisy", uniform.iterations,
+                weighted.iterations);
+    for (const SacIaResult* r : {&uniform, &weighted}) {
+      EXPECT_EQ(r->status, Status::kOk) << exact;
+      EXPECT_LT(rms_offset(e.source, r->T_target_source, e.T_target_source), 0.01) << exact;
+      // Inliers and rmse recounted from scratch at the returned pose.
+      std::size_t inliers = 0;
+      double sum_sq = 0.0;
+      const float m1_sq = static_cast<float>(s.huber_threshold * s.huber_threshold);
+      for (const Vector3f& p : e.source.points) {
+        const auto nn = tree.nearest((r->T_target_source * p.cast<double>()).cast<float>(), m1_sq);
+        if (nn && nn->dist_sq < m1_sq) {
+          ++inliers;
+          sum_sq += nn->dist_sq;
+        }
+      }
+      EXPECT_NEAR(static_cast<double>(r->num_inliers), static_cast<double>(inliers), 0.001 * inliers + 1) << exact;
+      EXPECT_NEAR(r->rmse, std::sqrt(sum_sq / static_cast<double>(inliers)), 1e-4) << exact;
+    }
+    if (exact) {
+      EXPECT_LE(weighted.iterations, 3);
+      EXPECT_GT(uniform.iterations, 10 * weighted.iterations);
+    } else {
+      EXPECT_LT(weighted.iterations, uniform.iterations);
+    }
+  }
+}
+
 TEST(SacIaTest, PrescoringAndMutualFilterKeepResultAndDeterminism) {
   PLUMB_REQUIRE_DATA(p4, "cloud3d/pcl_test/bun4.pcd");
   const EasyCase e = easy_case();

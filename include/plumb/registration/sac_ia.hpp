@@ -22,6 +22,12 @@ struct SacIaSettings {
   std::size_t num_samples = 3;          ///< points per hypothesis (SEEDS A1.4a), >= 3
   double min_sample_distance = 1.0;     ///< d: samples are pairwise farther apart than this [m]
   std::size_t k_correspondences = 5;    ///< a sample's match is drawn among its k most similar target FPFH, >= 1
+  /// How a sample's match is drawn among its k candidates. Off: uniformly (Rusu et al. 2009).
+  /// On: candidate m with probability proportional to exp(-(f_m^2 - f_1^2) / (2 f_1^2)), f being
+  /// the feature distance and f_1 the closest one. A match much more similar than the others is
+  /// drawn almost every time; candidates about equally similar are drawn about uniformly. The
+  /// draw stays random among the k, so a wrong closest match does not lock the search.
+  bool similarity_weighted = true;
   int max_iterations = 20000;           ///< hypotheses drawn at most, >= 1
   double huber_threshold = 0.3;         ///< m1 of the Huber penalty (SEEDS eq. 2) [m]
   /// m1 is also the largest residual a sample pair may keep under its own hypothesis (a cheap

@@ -66,10 +66,10 @@ class SacIaCandidates {
  public:
   SacIaCandidates(const std::vector<FpfhSignature>& source_features, const std::vector<std::size_t>& src_ids,
                   const std::vector<FpfhSignature>& target_features, const std::vector<std::size_t>& tgt_ids,
-                  std::size_t k, bool mutual)
-      : sf_(source_features), tf_(target_features), src_ids_(src_ids), k_(k), mutual_(mutual),
-        target_tree_(target_features, tgt_ids), cand_(src_ids.size() * k), count_(src_ids.size(), kUnknown),
-        dist_(k) {
+                  std::size_t k, bool mutual, bool weighted)
+      : sf_(source_features), tf_(target_features), src_ids_(src_ids), k_(k), mutual_(mutual), weighted_(weighted),
+        target_tree_(target_features, tgt_ids), cand_(src_ids.size() * k), weight_(src_ids.size() * k),
+        count_(src_ids.size(), kUnknown), dist_(k) {
     if (mutual_) {
       source_tree_ = std::make_unique<FeatureKdTree<kFpfhBins>>(source_features, src_ids);
       back_.resize(target_features.size() * k);
@@ -83,6 +83,21 @@ class SacIaCandidates {
     if (count_[a] == kUnknown) compute(a);
     out = &cand_[a * k_];
     return count_[a];
+  }
+  /// Probability of drawing each candidate of a (after get()), summing to 1.
+  const double* probabilities(std::size_t a) const { return &weight_[a * k_]; }
+  /// One candidate of a (after get(), count > 0) drawn with probabilities(a).
+  std::uint32_t draw(std::size_t a, Rng& rng) const {
+    const std::size_t n = count_[a];
+    const std::uint32_t* c = &cand_[a * k_];
+    if (!weighted_) return c[rng.uniform_index(n)];
+    const double* p = &weight_[a * k_];
+    double u = rng.uniform();
+    for (std::size_t m = 0; m + 1 < n; ++m) {
+      if (u < p[m]) return c[m];
+      u -= p[m];
+    }
+    return c[n - 1];
   }
   std::size_t num_known() const { return known_.size(); }
   const std::vector<std::size_t>& known_points() const { return known_; }
@@ -104,6 +119,31 @@ class SacIaCandidates {
       }
       n = kept;
     }
+    // Drawing probabilities: uniform, or a Gaussian likelihood in the feature distance whose
+    // spread is the closest candidate's own distance (so only the relative similarity counts).
+    double* p = &weight_[a * k_];
+    double f1_sq = std::numeric_limits<double>::infinity(), sum = 0.0;
+    for (std::size_t m = 0; m < n; ++m) {
+      const std::uint32_t j = c[m];
+      double f_sq = 0.0;
+      for (std::size_t b = 0; b < kFpfhBins; ++b) {
+        const double e = static_cast<double>(sf_[src_ids_[a]][b]) - static_cast<double>(tf_[j][b]);
+        f_sq += e * e;
+      }
+      p[m] = f_sq;
+      f1_sq = std::min(f1_sq, f_sq);
+    }
+    for (std::size_t m = 0; m < n; ++m) {
+      if (!weighted_) {
+        p[m] = 1.0;
+      } else if (f1_sq > 0.0) {
+        p[m] = std::exp(-(p[m] - f1_sq) / (2.0 * f1_sq));
+      } else {
+        p[m] = p[m] == 0.0 ? 1.0 : 0.0;  // identical signatures: only those
+      }
+      sum += p[m];
+    }
+    for (std::size_t m = 0; m < n; ++m) p[m] /= sum;
     count_[a] = static_cast<std::uint32_t>(n);
     known_.push_back(a);
   }
@@ -113,9 +153,12 @@ class SacIaCandidates {
   const std::vector<std::size_t>& src_ids_;
   std::size_t k_;
   bool mutual_;
+  bool weighted_;
   FeatureKdTree<kFpfhBins> target_tree_;
   std::unique_ptr<FeatureKdTree<kFpfhBins>> source_tree_;
-  std::vector<std::uint32_t> cand_, count_;
+  std::vector<std::uint32_t> cand_;
+  std::vector<double> weight_;
+  std::vector<std::uint32_t> count_;
   std::vector<std::uint32_t> back_, back_count_;
   std::vector<float> dist_;
   std::vector<std::size_t> known_;
@@ -151,7 +194,8 @@ inline SacIaResult align_sac_ia(const PointCloud& source, const std::vector<Fpfh
   // SEEDS A1.4b: the k most similar target signatures, computed for a source point when it is
   // first sampled.
   const std::size_t k = std::min(settings.k_correspondences, tgt_ids.size());
-  detail::SacIaCandidates candidates(source_features, src_ids, target_features, tgt_ids, k, settings.mutual_filter);
+  detail::SacIaCandidates candidates(source_features, src_ids, target_features, tgt_ids, k, settings.mutual_filter,
+                                     settings.similarity_weighted);
 
   Rng rng(settings.seed);
   // Score points in a fixed random order: its first points are the pre-scoring subset, and the
@@ -181,30 +225,48 @@ inline SacIaResult align_sac_ia(const PointCloud& source, const std::vector<Fpfh
 
   // Huber total (SEEDS eq. 2, distances truncated at max_correspondence_distance) over
   // score_order[begin, end), added to `total`; stops early once total >= bound (exact: every
-  // penalty is >= 0).
+  // penalty is >= 0). Also counts the points within m1 (inliers) and their squared distances, so
+  // that the winner's statistics need no extra pass.
+  struct Inliers {
+    std::size_t count = 0;
+    double sum_sq = 0.0;
+  };
+  const float m1_sq_f = static_cast<float>(m1_sq);
   auto score_range = [&](const Eigen::Matrix3f& R, const Eigen::Vector3f& t, std::size_t begin, std::size_t end,
-                         double total, double bound) {
+                         double total, double bound, Inliers& inliers) {
     for (std::size_t n = begin; n < end && total < bound; ++n) {
       const auto nn = target_tree.nearest(R * source.points[score_order[n]] + t, max_d_sq);
-      total += nn ? huber_penalty(std::sqrt(static_cast<double>(nn->dist_sq)), m1) : far_cost;
+      if (!nn) {
+        total += far_cost;
+        continue;
+      }
+      total += huber_penalty(std::sqrt(static_cast<double>(nn->dist_sq)), m1);
+      if (nn->dist_sq < m1_sq_f) {
+        ++inliers.count;
+        inliers.sum_sq += static_cast<double>(nn->dist_sq);
+      }
     }
     return total;
   };
-  // Early termination (RANSAC-style): w = share of the computed (point, candidate) pairs that the
-  // best hypothesis maps within m1, the chance that one drawn pair is right; an all-correct set
-  // of s pairs then comes with probability about w^s per hypothesis.
+  Inliers best_inliers;
+  // Early termination (RANSAC-style): w = the chance that the pair drawn for a sampled point is
+  // one the best hypothesis maps within m1, averaged over the points whose candidates are known;
+  // an all-correct set of s pairs then comes with probability about w^s per hypothesis.
   auto update_needed = [&] {
-    std::size_t num_good = 0, num_pairs = 0;
+    double sum_good = 0.0;
+    std::size_t num_points = 0;
     for (std::size_t a : candidates.known_points()) {
       const std::uint32_t* c = nullptr;
       const std::size_t n = candidates.get(a, c);
+      if (n == 0) continue;
+      const double* p = candidates.probabilities(a);
       const Vector3d x = best_T * source.points[src_ids[a]].cast<double>();
-      num_pairs += n;
+      ++num_points;
       for (std::size_t m = 0; m < n; ++m)
-        num_good += (x - target.points[c[m]].cast<double>()).squaredNorm() < m1_sq ? 1 : 0;
+        if ((x - target.points[c[m]].cast<double>()).squaredNorm() < m1_sq) sum_good += p[m];
     }
-    if (settings.confidence >= 1.0 || num_pairs == 0) return;
-    const double w = static_cast<double>(num_good) / static_cast<double>(num_pairs);
+    if (settings.confidence >= 1.0 || num_points == 0) return;
+    const double w = std::min(1.0, sum_good / static_cast<double>(num_points));
     const double ws = std::pow(w, static_cast<double>(s));
     needed = ws >= 1.0 ? 1.0 : ws > 0.0 ? std::log(1.0 - settings.confidence) / std::log1p(-ws)
                                         : static_cast<double>(settings.max_iterations);
@@ -241,7 +303,7 @@ inline SacIaResult align_sac_ia(const PointCloud& source, const std::vector<Fpfh
     if (!ok) continue;
     // SEEDS A1.4b: one of the k most similar signatures at random.
     for (std::size_t a = 0; a < s; ++a) {
-      const std::uint32_t j = cp[a][rng.uniform_index(np[a])];
+      const std::uint32_t j = candidates.draw(sample[a], rng);
       P[a] = source.points[src_ids[sample[a]]].cast<double>();
       Q[a] = target.points[j].cast<double>();
     }
@@ -276,13 +338,15 @@ inline SacIaResult align_sac_ia(const PointCloud& source, const std::vector<Fpfh
     const Eigen::Matrix3f R = h.T_target_source.linear().cast<float>();
     const Eigen::Vector3f t = h.T_target_source.translation().cast<float>();
     const double pre_bound = std::min(best, std::isfinite(best_pre) ? pre_factor * best_pre : best);
-    const double pre = score_range(R, t, 0, num_pre, 0.0, pre_bound);
+    Inliers inliers;
+    const double pre = score_range(R, t, 0, num_pre, 0.0, pre_bound, inliers);
     if (!(pre <= pre_factor * best_pre) && std::isfinite(best_pre)) continue;  // not promising
     if (!(pre < best)) continue;
     ++out.num_fully_scored;
-    const double total = score_range(R, t, num_pre, score_order.size(), pre, best);
-    if (!(total < best)) continue;
+    const double total = score_range(R, t, num_pre, score_order.size(), pre, best, inliers);
+    if (!(total < best)) continue;  // (a hypothesis that gets here was scored on every point)
     best = total;
+    best_inliers = inliers;
     best_pre = pre;
     best_T = h.T_target_source;
     update_needed();
@@ -293,18 +357,8 @@ inline SacIaResult align_sac_ia(const PointCloud& source, const std::vector<Fpfh
   out.T_target_source = best_T;
   out.score = best;
   out.status = out.converged ? Status::kOk : Status::kNotConverged;
-  // Inliers of the winner.
-  const Eigen::Matrix3f R = best_T.linear().cast<float>();
-  const Eigen::Vector3f t = best_T.translation().cast<float>();
-  const float m1_sq_f = static_cast<float>(m1_sq);
-  double sum_sq = 0.0;
-  for (std::size_t i : score_order) {
-    const auto nn = target_tree.nearest(R * source.points[i] + t, m1_sq_f);
-    if (nn && nn->dist_sq < m1_sq_f) {
-      ++out.num_inliers;
-      sum_sq += nn->dist_sq;
-    }
-  }
+  out.num_inliers = best_inliers.count;
+  const double sum_sq = best_inliers.sum_sq;
   out.overlap = static_cast<double>(out.num_inliers) / static_cast<double>(score_order.size());
   if (out.num_inliers > 0) out.rmse = std::sqrt(sum_sq / static_cast<double>(out.num_inliers));
   return out;
