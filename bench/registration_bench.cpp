@@ -5,7 +5,11 @@
 //
 // global_registration/<impl>/room_scan1: room_scan1 voxelised at 0.3 m (normals, FPFH radius
 //   1.5 m, computed once by plumb and given to all three) against itself moved by a fixed large
-//   transform; counter `success` = 1 when the result is within 0.3 m / 3 deg of the truth.
+//   transform; counter `success` = 1 when the result is within 0.3 m / 3 deg of the truth. Every
+//   source signature has an exact twin in the target here, so this is the easy case.
+// global_registration/<impl>/room_scan2_to_1: the same with room_scan2 (another scan of the room,
+//   from another place) as the source: signatures differ, the real case. Truth = the fine
+//   point-to-plane reference of the icp benchmarks composed with the fixed transform.
 // icp/<impl>/room_scan1: room_scan2 voxelised at 0.1 m to the full room_scan1, point-to-point,
 //   max correspondence distance 1 m, at most 50 iterations, from the NDT tutorial's guess; each
 //   timed run builds its target kd-tree. Counters: the result's offset `dt_mm` / `dr_mdeg` from a
@@ -77,30 +81,46 @@ std::pair<double, double> pose_error(const Eigen::Isometry3d& a, const Eigen::Is
 }
 
 struct GlobalData {
-  plumb::PointCloud target, source;            // source = target moved by T_source_target
-  std::vector<plumb::FpfhSignature> features;  // the same for both (same points)
+  plumb::PointCloud target, source;
+  std::vector<plumb::FpfhSignature> target_features, source_features;
   Eigen::Isometry3d T_target_source_true;
   plumb::LocalizeSettings settings = plumb::localize_settings_for_voxel(kCoarseVoxel);
 };
 
-const GlobalData& global_data() {
-  static const GlobalData d = [] {
-    GlobalData g;
-    g.target = voxel(plumb::io::read_cloud(plumb::bench::data_path("cloud3d/pcl_room_scans/room_scan1.pcd")), kCoarseVoxel);
-    plumb::NormalSettings ns;
-    ns.k = g.settings.normal_neighbors;
-    ns.radius = static_cast<float>(g.settings.normal_radius_factor * kCoarseVoxel);
-    plumb::compute_normals(g.target, ns);
-    plumb::FpfhSettings fs;
-    fs.radius = static_cast<float>(g.settings.fpfh_radius_factor * kCoarseVoxel);
-    g.features = plumb::compute_fpfh(g.target, fs).features;
-    const Eigen::Isometry3d T_source_target = pose(2.2, Eigen::Vector3d(7.0, -4.0, 0.3));
-    g.source = plumb::transformed(g.target, T_source_target);
-    g.T_target_source_true = T_source_target.inverse();
-    return g;
-  }();
+/// Normals and FPFH of a cloud already voxelised at kCoarseVoxel, with the localizer's radii.
+std::vector<plumb::FpfhSignature> coarse_features(plumb::PointCloud& c, const plumb::LocalizeSettings& settings) {
+  plumb::NormalSettings ns;
+  ns.k = settings.normal_neighbors;
+  ns.radius = static_cast<float>(settings.normal_radius_factor * kCoarseVoxel);
+  plumb::compute_normals(c, ns);
+  plumb::FpfhSettings fs;
+  fs.radius = static_cast<float>(settings.fpfh_radius_factor * kCoarseVoxel);
+  return plumb::compute_fpfh(c, fs).features;
+}
+
+/// `source_scan` (voxelised, its normals and features computed in its own frame) moved by a
+/// fixed large transform, against room_scan1 voxelised. T_scan1_source: the source scan's true
+/// pose in room_scan1.
+GlobalData make_global_data(const plumb::PointCloud& source_scan, const Eigen::Isometry3d& T_scan1_source) {
+  GlobalData g;
+  g.target = voxel(plumb::io::read_cloud(plumb::bench::data_path("cloud3d/pcl_room_scans/room_scan1.pcd")), kCoarseVoxel);
+  g.target_features = coarse_features(g.target, g.settings);
+  plumb::PointCloud src = voxel(source_scan, kCoarseVoxel);
+  g.source_features = coarse_features(src, g.settings);
+  const Eigen::Isometry3d T_moved_source = pose(2.2, Eigen::Vector3d(7.0, -4.0, 0.3));
+  g.source = plumb::transformed(src, T_moved_source);
+  g.T_target_source_true = T_scan1_source * T_moved_source.inverse();
+  return g;
+}
+
+const GlobalData& global_self() {
+  static const GlobalData d = make_global_data(
+      plumb::io::read_cloud(plumb::bench::data_path("cloud3d/pcl_room_scans/room_scan1.pcd")),
+      Eigen::Isometry3d::Identity());
   return d;
 }
+
+const GlobalData& global_pair();  // after icp_data(), whose reference it uses
 
 void report_success(benchmark::State& state, const Eigen::Isometry3d& T, const Eigen::Isometry3d& truth) {
   const auto e = pose_error(T, truth);
@@ -108,8 +128,8 @@ void report_success(benchmark::State& state, const Eigen::Isometry3d& T, const E
   state.counters["dt_m"] = e.first;
 }
 
-void bm_global_plumb(benchmark::State& state) {
-  const GlobalData& g = global_data();
+void bm_global_plumb(benchmark::State& state, const GlobalData& (*data)()) {
+  const GlobalData& g = data();
   plumb::SacIaSettings s = g.settings.sac_ia;
   s.huber_threshold = g.settings.huber_factor * kCoarseVoxel;
   s.max_correspondence_distance = g.settings.correspondence_factor * kCoarseVoxel;
@@ -117,7 +137,8 @@ void bm_global_plumb(benchmark::State& state) {
   int iterations = 0;
   for (auto _ : state) {
     const plumb::KdTree3f tree(g.target);
-    const plumb::SacIaResult r = plumb::align_sac_ia(g.source, g.features, g.target, g.features, tree, s);
+    const plumb::SacIaResult r =
+        plumb::align_sac_ia(g.source, g.source_features, g.target, g.target_features, tree, s);
     benchmark::DoNotOptimize(r.score);
     T = r.T_target_source;
     iterations = r.iterations;
@@ -156,6 +177,12 @@ const IcpData& icp_data() {
   return d;
 }
 
+const GlobalData& global_pair() {
+  static const GlobalData d = make_global_data(
+      plumb::io::read_cloud(plumb::bench::data_path("cloud3d/pcl_room_scans/room_scan2.pcd")), icp_data().reference);
+  return d;
+}
+
 void report_icp(benchmark::State& state, const Eigen::Isometry3d& T, const IcpData& c) {
   const auto e = pose_error(T, c.reference);
   state.counters["dt_mm"] = e.first * 1e3;
@@ -190,23 +217,29 @@ pcl::PointCloud<pcl::PointXYZ>::Ptr to_pcl(const plumb::PointCloud& c) {
   return out;
 }
 
-void bm_global_pcl(benchmark::State& state) {
-  const GlobalData& g = global_data();
-  auto src = to_pcl(g.source);
-  auto tgt = to_pcl(g.target);
+pcl::PointCloud<pcl::FPFHSignature33>::Ptr to_pcl(const std::vector<plumb::FpfhSignature>& features) {
   auto feats = std::make_shared<pcl::PointCloud<pcl::FPFHSignature33>>();
-  for (const auto& f : g.features) {
+  for (const auto& f : features) {
     pcl::FPFHSignature33 s;
     for (int b = 0; b < 33; ++b) s.histogram[b] = f[static_cast<std::size_t>(b)];
     feats->push_back(s);
   }
+  return feats;
+}
+
+void bm_global_pcl(benchmark::State& state, const GlobalData& (*data)()) {
+  const GlobalData& g = data();
+  auto src = to_pcl(g.source);
+  auto tgt = to_pcl(g.target);
+  auto src_feats = to_pcl(g.source_features);
+  auto tgt_feats = to_pcl(g.target_features);
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   for (auto _ : state) {
     pcl::SampleConsensusInitialAlignment<pcl::PointXYZ, pcl::PointXYZ, pcl::FPFHSignature33> sac;
     sac.setInputSource(src);
-    sac.setSourceFeatures(feats);
+    sac.setSourceFeatures(src_feats);
     sac.setInputTarget(tgt);
-    sac.setTargetFeatures(feats);
+    sac.setTargetFeatures(tgt_feats);
     sac.setMinSampleDistance(static_cast<float>(g.settings.sac_ia.min_sample_distance));
     sac.setMaxCorrespondenceDistance(g.settings.correspondence_factor * kCoarseVoxel);
     sac.setMaximumIterations(1000);
@@ -250,14 +283,20 @@ open3d::geometry::PointCloud to_open3d(const plumb::PointCloud& c) {
   return out;
 }
 
-void bm_global_open3d(benchmark::State& state) {
-  const GlobalData& g = global_data();
+reg::Feature to_open3d(const std::vector<plumb::FpfhSignature>& features) {
+  reg::Feature feats;
+  feats.Resize(33, static_cast<int>(features.size()));
+  for (std::size_t i = 0; i < features.size(); ++i)
+    for (int b = 0; b < 33; ++b) feats.data_(b, static_cast<Eigen::Index>(i)) = features[i][static_cast<std::size_t>(b)];
+  return feats;
+}
+
+void bm_global_open3d(benchmark::State& state, const GlobalData& (*data)()) {
+  const GlobalData& g = data();
   const auto src = to_open3d(g.source);
   const auto tgt = to_open3d(g.target);
-  reg::Feature feats;
-  feats.Resize(33, static_cast<int>(g.features.size()));
-  for (std::size_t i = 0; i < g.features.size(); ++i)
-    for (int b = 0; b < 33; ++b) feats.data_(b, static_cast<Eigen::Index>(i)) = g.features[i][static_cast<std::size_t>(b)];
+  const reg::Feature src_feats = to_open3d(g.source_features);
+  const reg::Feature tgt_feats = to_open3d(g.target_features);
   const double dist = 1.5 * kCoarseVoxel;
   const reg::CorrespondenceCheckerBasedOnEdgeLength edge(0.9);
   const reg::CorrespondenceCheckerBasedOnDistance close(dist);
@@ -265,7 +304,7 @@ void bm_global_open3d(benchmark::State& state) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   for (auto _ : state) {
     const reg::RegistrationResult r = reg::RegistrationRANSACBasedOnFeatureMatching(
-        src, tgt, feats, feats, /*mutual_filter=*/false, dist, reg::TransformationEstimationPointToPoint(false), 3,
+        src, tgt, src_feats, tgt_feats, /*mutual_filter=*/false, dist, reg::TransformationEstimationPointToPoint(false), 3,
         checkers, reg::RANSACConvergenceCriteria(100000, 0.999));
     T.matrix() = r.transformation_;
     benchmark::DoNotOptimize(r.fitness_);
@@ -298,13 +337,20 @@ int main(int argc, char** argv) {
   auto reg_bm = [](const std::string& name, void (*fn)(benchmark::State&)) {
     benchmark::RegisterBenchmark(name.c_str(), fn)->Unit(benchmark::kMillisecond);
   };
-  reg_bm("global_registration/plumb/" + ds, bm_global_plumb);
+  using GlobalBm = void (*)(benchmark::State&, const GlobalData& (*)());
+  auto global_bm = [](const std::string& name, GlobalBm fn, const GlobalData& (*data)()) {
+    benchmark::RegisterBenchmark(name.c_str(), fn, data)->Unit(benchmark::kMillisecond);
+  };
+  for (const auto& [suffix, data] : {std::pair<std::string, const GlobalData& (*)()>{ds, global_self},
+                                     std::pair<std::string, const GlobalData& (*)()>{"room_scan2_to_1", global_pair}}) {
+    global_bm("global_registration/plumb/" + suffix, bm_global_plumb, data);
 #ifdef PLUMB_BENCH_HAVE_PCL
-  reg_bm("global_registration/pcl_sacia/" + ds, bm_global_pcl);
+    global_bm("global_registration/pcl_sacia/" + suffix, bm_global_pcl, data);
 #endif
 #ifdef PLUMB_BENCH_HAVE_OPEN3D
-  reg_bm("global_registration/open3d/" + ds, bm_global_open3d);
+    global_bm("global_registration/open3d/" + suffix, bm_global_open3d, data);
 #endif
+  }
   reg_bm("icp/plumb/" + ds, bm_icp_plumb);
 #ifdef PLUMB_BENCH_HAVE_PCL
   reg_bm("icp/pcl/" + ds, bm_icp_pcl);
