@@ -23,6 +23,22 @@ namespace plumb {
 
 // ---- result collectors ------------------------------------------------------------------------
 
+namespace detail {
+
+/// The next float above a non-negative v (v itself when infinite): turns "d <= v" into the
+/// collectors' strict "d < bound".
+inline float next_float_up(float v) {
+  if (!(v < std::numeric_limits<float>::infinity())) return v;
+  if (v == 0.0f) return std::numeric_limits<float>::denorm_min();  // also for -0 (sign bit set)
+  std::uint32_t bits;
+  std::memcpy(&bits, &v, sizeof bits);
+  ++bits;
+  std::memcpy(&v, &bits, sizeof bits);
+  return v;
+}
+
+}  // namespace detail
+
 /// Fixed-capacity sorted insertion array (positions, distances) in caller memory: for the small k
 /// of typical queries this beats a heap. `worst` is the pruning bound: infinite until k are held.
 template <int Dim>
@@ -470,6 +486,21 @@ std::size_t KdTree<Dim>::knn(const Point& query, std::size_t k, std::size_t* ind
 }
 
 template <int Dim>
+std::size_t KdTree<Dim>::knn(const Point& query, std::size_t k, std::size_t* indices, float* sq_dists,
+                             float max_dist_sq) const {
+  k = std::min(k, size());
+  if (k == 0 || !query.allFinite() || !(max_dist_sq >= 0.0f)) return 0;
+  KnnSet set{indices, sq_dists, k};
+  // The set keeps d < worst: start one float above the limit so that d == max_dist_sq counts.
+  set.worst = detail::next_float_up(max_dist_sq);
+  float box_d[Dim];
+  if (!set.visit(root_box_dist(query.data(), box_d))) return 0;
+  search(query.data(), box_d, set);
+  for (std::size_t i = 0; i < set.count; ++i) indices[i] = ids_[indices[i]];
+  return set.count;
+}
+
+template <int Dim>
 std::size_t KdTree<Dim>::knn(const Point& query, std::size_t k, std::vector<std::size_t>& indices,
                              std::vector<float>& sq_dists) const {
   k = std::min(k, size());
@@ -496,13 +527,7 @@ std::optional<Neighbor> KdTree<Dim>::nearest(const Point& query, float max_dist_
   if (!query.allFinite() || !(max_dist_sq >= 0.0f)) return std::nullopt;
   // Accept d <= max_dist_sq: the set keeps d < best_d, so start one float above the limit.
   NnSet set;
-  set.best_d = max_dist_sq;
-  if (max_dist_sq < std::numeric_limits<float>::infinity()) {
-    std::uint32_t bits;
-    std::memcpy(&bits, &max_dist_sq, sizeof bits);
-    ++bits;
-    std::memcpy(&set.best_d, &bits, sizeof bits);
-  }
+  set.best_d = detail::next_float_up(max_dist_sq);
   float box_d[Dim];
   const float bound = root_box_dist(query.data(), box_d);
   if (!set.visit(bound)) return std::nullopt;
