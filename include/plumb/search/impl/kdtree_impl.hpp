@@ -50,6 +50,8 @@ struct KdTree<Dim>::KnnSet {
   float worst = std::numeric_limits<float>::infinity();
 
   static constexpr bool kFastFirstLeaf = false;
+  static constexpr bool kStrictBound = true;  ///< add() takes exactly d < bound()
+  float bound() const { return worst; }
   bool visit(float box_dist) const { return box_dist < worst; }
   bool accepts(float d) const { return d < worst; }
   void add(float d, std::uint32_t i) {
@@ -76,6 +78,8 @@ struct KdTree<Dim>::NnSet {
   bool visit(float box_dist) const { return box_dist < best_d; }
   bool accepts(float d) const { return d < best_d; }
   static constexpr bool kFastFirstLeaf = true;
+  static constexpr bool kStrictBound = true;  ///< add() takes exactly d < bound()
+  float bound() const { return best_d; }
   bool done() const { return !(best_d > 0.0f); }  // distance 0 found: nothing can beat it
   void add(float d, std::uint32_t i) {
     if (d < best_d) {
@@ -95,6 +99,7 @@ struct KdTree<Dim>::RadiusSet {
   bool visit(float box_dist) const { return box_dist <= r_sq; }
   bool accepts(float d) const { return d <= r_sq; }
   static constexpr bool kFastFirstLeaf = false;
+  static constexpr bool kStrictBound = false;  ///< takes d <= r_sq: scanned one by one
   static bool done() { return false; }
   void add(float d, std::uint32_t i) {
     if (d <= r_sq) {
@@ -352,7 +357,33 @@ void KdTree<Dim>::scan_leaf(const Node& node, const float* q, Set& set) const {
     for (std::uint32_t j = 0; j < m && set.accepts(d); ++j) set.add(d, node.a + j);
     return;
   }
-  for (std::uint32_t j = 0; j < m; ++j) set.add(leaf_dist(x, m, j, q), node.a + j);
+  std::uint32_t j = 0;
+#if defined(__SSE2__)
+  if constexpr (Set::kStrictBound) {
+    // Four points per step, each lane summing exactly as leaf_dist does (bit-identical distances);
+    // only lanes below the set's bound reach add(), in order. The bound only shrinks, so a lane
+    // masked out here would have been rejected by add() too: the result is that of the plain
+    // loop, with one branch per four points (rarely taken once a kNN set is full) instead of one
+    // per point.
+    __m128 qv[Dim];
+    for (int k = 0; k < Dim; ++k) qv[k] = _mm_set1_ps(q[k]);
+    for (; j + 4 <= m; j += 4) {
+      __m128 d4 = _mm_setzero_ps();
+      for (int k = 0; k < Dim; ++k) {
+        const __m128 t = _mm_sub_ps(_mm_loadu_ps(x + static_cast<std::size_t>(k) * m + j), qv[k]);
+        d4 = _mm_add_ps(d4, _mm_mul_ps(t, t));
+      }
+      const int mask = _mm_movemask_ps(_mm_cmplt_ps(d4, _mm_set1_ps(set.bound())));
+      if (mask == 0) continue;
+      alignas(16) float d[4];
+      _mm_store_ps(d, d4);
+      for (std::uint32_t lane = 0; lane < 4; ++lane) {
+        if (mask & (1 << lane)) set.add(d[lane], node.a + j + lane);
+      }
+    }
+  }
+#endif
+  for (; j < m; ++j) set.add(leaf_dist(x, m, j, q), node.a + j);
 }
 
 // Depth-first search, nearer child first. box_d[k] holds the squared distance along dimension k
