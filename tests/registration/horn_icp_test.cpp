@@ -417,5 +417,134 @@ TEST(IcpTest, MatchesBruteForceIcpWithFarPoints) {
   EXPECT_LT(e.second, 1e-6);
 }
 
+// ---- the neighbour cache of align_icp against brute force, bit for bit -------------------------
+
+/// Nearest target point of x within d (d^2 in float), by brute force with the kd-tree's float
+/// distance (detail::dist_sq); the first of equally distant points wins. -1: none.
+int brute_nearest(const PointCloud& target, const Vector3f& x, float d_sq, float& best) {
+  best = d_sq;
+  int best_j = -1;
+  for (std::size_t j = 0; j < target.size(); ++j) {
+    const float dd = detail::dist_sq<3>(target.points[j].data(), x.data());
+    if (dd < best || (best_j < 0 && dd == best)) {
+      best = dd;
+      best_j = static_cast<int>(j);
+    }
+  }
+  return best_j;
+}
+
+/// detail::icp_pairs' pairs without any cache: brute-force nearest neighbours within d.
+std::vector<detail::IcpPair> brute_pairs(const PointCloud& source, const PointCloud& target,
+                                         const Eigen::Isometry3d& T, double d, double& mse) {
+  const Eigen::Matrix3f R = T.linear().cast<float>();
+  const Eigen::Vector3f t = T.translation().cast<float>();
+  std::vector<detail::IcpPair> out;
+  double sum_sq = 0.0;
+  for (const Vector3f& p : source.points) {
+    const Vector3f x = R * p + t;
+    float best = 0.0f;
+    const int j = brute_nearest(target, x, static_cast<float>(d * d), best);
+    if (j < 0) continue;
+    detail::IcpPair pr;
+    pr.x = x.cast<double>();
+    pr.q = target.points[static_cast<std::size_t>(j)].cast<double>();
+    pr.n.setZero();
+    out.push_back(pr);
+    sum_sq += static_cast<double>(best);
+  }
+  mse = out.empty() ? 0.0 : sum_sq / static_cast<double>(out.size());
+  return out;
+}
+
+/// A target like the benchmark's room_scan1, which holds every point twice (ties in every query),
+/// and a sparser source with clutter 2-5 m outside the room (points without any neighbour).
+std::pair<PointCloud, PointCloud> cache_test_clouds() {
+  PointCloud target = room_cloud(0.15, 5);
+  target.normals.clear();
+  const std::size_t n = target.size();
+  for (std::size_t i = 0; i < n; ++i) target.points.push_back(target.points[i]);
+  Rng rng(13);
+  PointCloud source = room_cloud(0.3, 6);
+  source.normals.clear();
+  for (int i = 0; i < 150; ++i)
+    source.points.emplace_back(static_cast<float>(rng.uniform(8, 11)), static_cast<float>(rng.uniform(-3, 7)),
+                               static_cast<float>(rng.uniform(0, 3)));
+  return {target, source};
+}
+
+// One cache through a sequence of poses whose steps shrink from 0.3 m to 1e-6 m (as in ICP), then
+// jump, with d changing between calls: every call's pairs (and their order) and mean squared
+// residual equal brute force exactly. Equally distant target points are exact duplicates here, so
+// the tie that the cache may break differently cannot show.
+TEST(IcpTest, NeighbourCacheGivesBruteForcePairs) {
+  const auto [target, source] = cache_test_clouds();
+  const KdTree3f tree(target);
+  detail::IcpNnCache cache(source.size());
+  std::vector<detail::IcpPair> pairs;
+  IcpSettings s;
+  Rng rng(17);
+  Eigen::Isometry3d T = random_pose(rng, 0.3, 0.1);
+  const double ds[] = {1.0, 0.5, 0.2, 0.35};
+  int call = 0;
+  std::size_t total_pairs = 0;
+  for (double step : {0.3, 0.1, 0.03, 0.01, 3e-3, 1e-3, 1e-4, 1e-5, 1e-6, 0.0, 0.5, 0.02, 1e-3, 0.0}) {
+    T = random_pose(rng, step, step / 3) * T;
+    const double d = ds[call++ % 4];
+    const double mse = detail::icp_pairs(source, target, tree, T, d, s, pairs, cache);
+    double mse_ref = 0.0;
+    const std::vector<detail::IcpPair> ref = brute_pairs(source, target, T, d, mse_ref);
+    ASSERT_EQ(pairs.size(), ref.size()) << "call " << call;
+    for (std::size_t k = 0; k < ref.size(); ++k) {
+      ASSERT_EQ(pairs[k].x, ref[k].x) << "call " << call << " pair " << k;
+      ASSERT_EQ(pairs[k].q, ref[k].q) << "call " << call << " pair " << k;
+    }
+    EXPECT_EQ(mse, mse_ref) << "call " << call;
+    total_pairs += ref.size();
+  }
+  EXPECT_GT(total_pairs, 14 * source.size() / 2);  // the test is not vacuous
+}
+
+// align_icp over several rounds (the overlap gate never passes, so d shrinks from 0.6 to 0.2 m and
+// the cache lives through all of them) equals plain ICP written here on brute-force pairs: the
+// same pose bit for bit, the same iterations, inliers and RMSE.
+TEST(IcpTest, CachedIcpEqualsBruteForceIcpBitForBit) {
+  const auto [target, source] = cache_test_clouds();
+  Rng rng(19);
+  const Eigen::Isometry3d T_init = random_pose(rng, 0.2, 0.08);
+  IcpSettings s;
+  s.max_correspondence_distance = 0.6;
+  s.distance_step = 0.2;
+  s.min_correspondence_distance = 0.2;
+  s.max_iterations = 10;
+  s.tolerance = 0.0;  // every round runs all of its iterations
+  s.min_step = 0.0;
+  s.min_overlap = 1.0;  // the clutter keeps the overlap below 1: every round runs
+  const IcpResult r = align_icp(source, target, T_init, s);
+  EXPECT_EQ(r.rounds, 3);
+  EXPECT_EQ(r.iterations, 30);
+
+  Eigen::Isometry3d T = T_init;
+  double d = s.max_correspondence_distance;
+  double mse = 0.0;
+  for (int round = 0; round < 3; ++round) {
+    if (round > 0) d -= s.distance_step;  // as align_icp steps it
+    for (int it = 0; it < s.max_iterations; ++it) {
+      const std::vector<detail::IcpPair> pairs = brute_pairs(source, target, T, d, mse);
+      Eigen::Isometry3d delta;
+      ASSERT_TRUE(detail::icp_step(pairs, s, delta));
+      T = delta * T;
+      T.linear() = Eigen::Quaterniond(T.linear()).normalized().toRotationMatrix();
+    }
+  }
+  const std::vector<detail::IcpPair> pairs = brute_pairs(source, target, T, d, mse);
+  double sum_sq = 0.0;
+  for (const detail::IcpPair& pr : pairs) sum_sq += (pr.x - pr.q).squaredNorm();
+  EXPECT_EQ(r.T_target_source.matrix(), T.matrix());
+  EXPECT_EQ(r.num_inliers, pairs.size());
+  EXPECT_GT(r.num_inliers, source.size() / 2);
+  EXPECT_DOUBLE_EQ(r.rmse, std::sqrt(sum_sq / static_cast<double>(pairs.size())));
+}
+
 }  // namespace
 }  // namespace plumb

@@ -109,6 +109,30 @@ void expect_knn_equal(const KdTree<Dim>& tree, const BruteForceSearch<Dim>& orac
   expect_knn_equal<Dim>({&tree}, oracle, pts, q, k, what);
 }
 
+// Bounded kNN equals the oracle's kNN cut at the bound: the same sorted distances, indices at
+// the distances reported for them.
+template <int Dim>
+void expect_bounded_knn_equal(const std::vector<const KdTree<Dim>*>& trees,
+                              const BruteForceSearch<Dim>& oracle, const Points<Dim>& pts,
+                              const Eigen::Matrix<float, Dim, 1>& q, std::size_t k, float max_dist_sq,
+                              const std::string& what) {
+  std::vector<std::size_t> bi;
+  std::vector<float> bd;
+  oracle.knn(q, k, bi, bd);
+  while (!bd.empty() && !(bd.back() <= max_dist_sq)) bd.pop_back();
+  for (const KdTree<Dim>* tree : trees) {
+    std::vector<std::size_t> ti(k + 1);
+    std::vector<float> td(k + 1);
+    const std::size_t tn = tree->knn(q, k, ti.data(), td.data(), max_dist_sq);
+    td.resize(tn);
+    EXPECT_EQ(td, bd) << what << " k=" << k << " max_dist_sq=" << max_dist_sq;
+    for (std::size_t i = 0; i < tn; ++i) {
+      ASSERT_LT(ti[i], pts.size()) << what;
+      EXPECT_EQ(td[i], true_dist_sq<Dim>(pts, ti[i], q)) << what;
+    }
+  }
+}
+
 template <int Dim>
 void expect_radius_equal(const std::vector<const KdTree<Dim>*>& trees,
                          const BruteForceSearch<Dim>& oracle, const Eigen::Matrix<float, Dim, 1>& q,
@@ -193,6 +217,7 @@ void check_random_clouds() {
         const auto q = qi % 2 == 0 ? pts[rng.uniform_index(n)] : random_query<Dim>(rng, 14.0);
         for (std::size_t k : {std::size_t{1}, std::size_t{5}, std::size_t{10}, n + 3}) {
           expect_knn_equal(tree_ptrs, oracle, pts, q, k, what);
+          for (float b : {0.0f, 0.09f, 4.0f, kInf}) expect_bounded_knn_equal(tree_ptrs, oracle, pts, q, k, b, what);
         }
         for (float r : {0.0f, 0.3f, 2.0f}) expect_radius_equal(tree_ptrs, oracle, q, r, what);
         expect_nearest_equal(tree_ptrs, oracle, q, kInf, what);
@@ -331,6 +356,10 @@ TEST(KdTreeTest, TiesGiveEqualDistanceSets) {
     for (std::size_t k : {1, 2, 4, 5, 9, 13}) expect_knn_equal(tree, oracle, pts, q, k, "grid");
     expect_radius_equal(tree, oracle, q, 1.0f, "grid");
     expect_radius_equal(tree, oracle, q, 2.5f, "grid");
+    // Bounds exactly at tie distances (0, 0.5, 1, 2.5 occur) count the points on them.
+    for (float b : {-0.0f, 0.0f, 0.5f, 1.0f, 2.5f}) {
+      for (std::size_t k : {1, 4, 9}) expect_bounded_knn_equal<2>({&tree}, oracle, pts, q, k, b, "grid");
+    }
   }
   // The 4 nearest of a cell centre: exactly its 4 corners.
   const auto nn = tree.knn(Eigen::Vector2f(0.5f, 0.5f), 4);

@@ -106,6 +106,14 @@ class KdTree {
   /// @brief knn() returning the neighbours as values.
   std::vector<Neighbor> knn(const Point& query, std::size_t k) const;
 
+  /// @brief The k nearest points among those with squared distance <= max_dist_sq [m^2], sorted
+  ///        by increasing distance, into caller buffers that hold k values.
+  /// @return the count written: fewer than k when fewer points lie within the bound (then every
+  ///         other point is farther than max_dist_sq); 0 for a non-finite query or a negative or
+  ///         NaN bound. A finite bound prunes from the start, like nearest()'s.
+  std::size_t knn(const Point& query, std::size_t k, std::size_t* indices, float* sq_dists,
+                  float max_dist_sq) const;
+
   /// @brief The nearest point whose squared distance is <= max_dist_sq [m^2], if any.
   /// @note A finite max_dist_sq also speeds the search up (it prunes from the start).
   std::optional<Neighbor> nearest(const Point& query,

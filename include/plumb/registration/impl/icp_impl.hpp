@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -14,6 +15,7 @@
 #include "plumb/core/lie.hpp"
 #include "plumb/registration/horn.hpp"
 #include "plumb/registration/overlap.hpp"
+#include "plumb/search/neighbors.hpp"
 
 namespace plumb {
 
@@ -52,29 +54,53 @@ inline void check_icp_settings(const IcpSettings& s) {
               "align_icp: settings.degeneracy_threshold = " << s.degeneracy_threshold << " must be >= 0");
 }
 
-constexpr std::uint32_t kNoHint = std::numeric_limits<std::uint32_t>::max();
+/// What each source point's last kd-tree query taught: its K nearest target points at the
+/// position x_ref where it was made, and a radius r around x_ref that holds no other target point
+/// (the K-th distance, or the query bound when fewer were within it). Reused across iterations and
+/// rounds (it does not depend on d). ICP's updates shrink fast, so a point soon stays within a
+/// few millimetres of x_ref, where the cache alone decides its nearest neighbour.
+class IcpNnCache {
+ public:
+  /// Neighbours kept per point. Larger K answers more moves without a query but makes each
+  /// query and each check dearer; 8 was fastest on the room_scan1 benchmark (bench/README.md),
+  /// whose target holds every point twice (so 8 is 4 distinct positions there).
+  static constexpr std::size_t kK = 8;
 
-/// What one source point's last kd-tree query taught (reused across iterations and rounds).
-struct IcpNnCache {
-  std::uint32_t nn = kNoHint;  ///< last nearest target point (kNoHint: none known)
-  float clear = 0.0f;          ///< no target point lies within this distance of x_ref [m] (0: unknown)
-  Vector3f x_ref = Vector3f::Zero();  ///< where the point was when `clear` was established
+  struct Entry {
+    Vector3f x_ref = Vector3f::Zero();  ///< where the point was at its last query
+    float r = -1.0f;                    ///< no uncached target point lies closer to x_ref [m] (< 0: no query yet)
+    std::uint32_t count = 0;            ///< cached neighbours, <= kK (fewer: no more within r)
+    std::uint32_t idx[kK] = {};         ///< their target indices, nearest first at x_ref
+  };
+
+  explicit IcpNnCache(std::size_t num_source_points) : entries_(num_source_points) {}
+  Entry& operator[](std::size_t i) { return entries_[i]; }
+
+ private:
+  std::vector<Entry> entries_;
 };
 
 /// Nearest-neighbour pairs of the source under T within distance d (SEEDS A1.6 steps 1-2).
 /// Returns the mean squared residual of the metric.
-/// `cache[i]` carries source point i's previous query and is updated; it only prunes, so the
-/// pairs are the same as with plain nearest-neighbour queries (up to which of several
-/// equidistant points is returned):
-/// - the search is bounded by the distance to the previous neighbour (the true nearest point is
-///   never farther), which the kd-tree uses to prune from the start;
-/// - a point without any target point within `clear` of x_ref has none within clear - |x - x_ref|
-///   of its position x (triangle inequality): while that exceeds d the query is skipped. Points
-///   that fall outside d are searched once out to 2d to learn such a radius. On partial overlap
-///   these far points are the most expensive queries, and they stay far for many iterations.
+///
+/// `cache` (see IcpNnCache) replaces most kd-tree queries by an exact test. A point at x that was
+/// last queried at x_ref has moved by delta = |x - x_ref|; by the triangle inequality every
+/// uncached target point is at least lim = r - delta from x. So
+/// - when the best cached point is within lim, it is the nearest neighbour (no query);
+/// - when lim > d and no cached point is within d, there is no neighbour within d (no query;
+///   this also keeps far points of a partial overlap from being searched every iteration);
+/// - otherwise a new kNN query at x refreshes the entry, bounded by the farthest cached point
+///   (K points lie within it) and by 2d (farther points never pair; r is then at least 2d).
+/// Cached distances are summed as the kd-tree sums them (detail::dist_sq) and lim keeps a margin
+/// far above float rounding, so the pairs and residuals are bit-identical to plain nearest()
+/// queries within d, except which of several points at exactly the same float distance is taken
+/// (the kd-tree leaves that unspecified too; duplicated target points are the common case, and
+/// there the choice cannot change the result).
 inline double icp_pairs(const PointCloud& source, const PointCloud& target, const KdTree3f& tree,
                         const Eigen::Isometry3d& T, double d, const IcpSettings& s,
-                        std::vector<IcpPair>& pairs, std::vector<IcpNnCache>& cache) {
+                        std::vector<IcpPair>& pairs, IcpNnCache& cache) {
+  constexpr std::size_t K = IcpNnCache::kK;
+  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
   pairs.clear();
   const Eigen::Matrix3f R = T.linear().cast<float>();
   const Eigen::Vector3f t = T.translation().cast<float>();
@@ -84,40 +110,50 @@ inline double icp_pairs(const PointCloud& source, const PointCloud& target, cons
   const bool point_to_plane = s.method == IcpMethod::kPointToPlane;
   const bool check_angle = source.has_normals() && target.has_normals() && s.max_normal_angle < 1.5707963;
   const float min_cos = static_cast<float>(std::cos(s.max_normal_angle));
+  std::size_t knn_idx[K];
+  float knn_d[K];
   double sum_sq = 0.0;
   for (std::size_t i = 0; i < source.points.size(); ++i) {
     const Vector3f& p = source.points[i];
     if (!p.allFinite()) continue;
     const Vector3f x = R * p + t;
-    IcpNnCache& c = cache[i];
-    if (c.clear > 0.0f) {
-      // Margins cover float rounding of the distances.
-      if (c.clear - (x - c.x_ref).norm() > d_f * 1.0001f + 1e-6f) continue;
-      c.clear = 0.0f;
-    }
-    float bound = far_sq;
-    if (c.nn != kNoHint) {
-      // Inflated a little so that rounding never excludes the old neighbour itself.
-      const float h = (target.points[c.nn] - x).squaredNorm();
-      bound = std::min(d_sq, h * 1.0001f + 1e-12f);
-    }
-    const auto nn = tree.nearest(x, bound);
-    if (!nn) {  // nothing within sqrt(bound) >= d
-      c.nn = kNoHint;
-      if (bound == far_sq) {
-        c.clear = 2.0f * d_f;
-        c.x_ref = x;
+    IcpNnCache::Entry& c = cache[i];
+    float best = std::numeric_limits<float>::infinity();
+    float worst = 0.0f;
+    std::uint32_t best_j = kNone;
+    for (std::uint32_t k = 0; k < c.count; ++k) {
+      const float dk = detail::dist_sq<3>(target.points[c.idx[k]].data(), x.data());
+      if (dk < best) {
+        best = dk;
+        best_j = c.idx[k];
       }
-      continue;
+      worst = std::max(worst, dk);
     }
-    if (!(nn->dist_sq <= d_sq)) {  // the nearest point is beyond d: remember how far
-      c.nn = kNoHint;
-      c.clear = std::sqrt(nn->dist_sq);
+    bool known = false;
+    if (c.r > 0.0f) {
+      // The margin covers float rounding of the coordinate differences and distances (~1e-7
+      // relative to the coordinates), with a wide safety factor; it costs a few hits at most.
+      const float slack = 1e-5f * (1.0f + x.cwiseAbs().maxCoeff() + c.r);
+      const float lim = c.r - (x - c.x_ref).norm() - slack;
+      if (lim > 0.0f && best <= lim * lim) {
+        known = true;  // the best cached point is the nearest
+      } else if (lim > d_f) {
+        known = true;  // best > lim^2 > d^2 and every other point is beyond lim: no pair
+        best = std::numeric_limits<float>::infinity();
+      }
+    }
+    if (!known) {
+      const float bound = c.count == K ? std::min(far_sq, worst) : far_sq;
+      const std::size_t n = tree.knn(x, K, knn_idx, knn_d, bound);
       c.x_ref = x;
-      continue;
+      c.count = static_cast<std::uint32_t>(n);
+      for (std::size_t k = 0; k < n; ++k) c.idx[k] = static_cast<std::uint32_t>(knn_idx[k]);
+      c.r = std::sqrt(n == K ? knn_d[K - 1] : bound);
+      best = n > 0 ? knn_d[0] : std::numeric_limits<float>::infinity();
+      best_j = n > 0 ? c.idx[0] : kNone;
     }
-    c.nn = static_cast<std::uint32_t>(nn->index);
-    const std::size_t j = nn->index;
+    if (!(best <= d_sq)) continue;
+    const std::size_t j = best_j;
     if (check_angle) {
       const Vector3f& nt = target.normals[j];
       const Vector3f& ns = source.normals[i];
@@ -135,7 +171,7 @@ inline double icp_pairs(const PointCloud& source, const PointCloud& target, cons
       sum_sq += r * r;
     } else {
       pr.n.setZero();
-      sum_sq += static_cast<double>(nn->dist_sq);
+      sum_sq += static_cast<double>(best);
     }
     pairs.push_back(pr);
   }
@@ -240,7 +276,7 @@ inline IcpResult align_icp(const PointCloud& source, const PointCloud& target, c
   double d = settings.max_correspondence_distance;
   std::vector<detail::IcpPair> pairs;
   pairs.reserve(source.size());
-  std::vector<detail::IcpNnCache> cache(source.size());
+  detail::IcpNnCache cache(source.size());
   bool failed = false;
   bool gate_passed = false;
   for (int round = 0; round < settings.max_rounds && !failed; ++round) {

@@ -23,6 +23,22 @@ namespace plumb {
 
 // ---- result collectors ------------------------------------------------------------------------
 
+namespace detail {
+
+/// The next float above a non-negative v (v itself when infinite): turns "d <= v" into the
+/// collectors' strict "d < bound".
+inline float next_float_up(float v) {
+  if (!(v < std::numeric_limits<float>::infinity())) return v;
+  if (v == 0.0f) return std::numeric_limits<float>::denorm_min();  // also for -0 (sign bit set)
+  std::uint32_t bits;
+  std::memcpy(&bits, &v, sizeof bits);
+  ++bits;
+  std::memcpy(&v, &bits, sizeof bits);
+  return v;
+}
+
+}  // namespace detail
+
 /// Fixed-capacity sorted insertion array (positions, distances) in caller memory: for the small k
 /// of typical queries this beats a heap. `worst` is the pruning bound: infinite until k are held.
 template <int Dim>
@@ -34,6 +50,8 @@ struct KdTree<Dim>::KnnSet {
   float worst = std::numeric_limits<float>::infinity();
 
   static constexpr bool kFastFirstLeaf = false;
+  static constexpr bool kStrictBound = true;  ///< add() takes exactly d < bound()
+  float bound() const { return worst; }
   bool visit(float box_dist) const { return box_dist < worst; }
   bool accepts(float d) const { return d < worst; }
   void add(float d, std::uint32_t i) {
@@ -60,6 +78,8 @@ struct KdTree<Dim>::NnSet {
   bool visit(float box_dist) const { return box_dist < best_d; }
   bool accepts(float d) const { return d < best_d; }
   static constexpr bool kFastFirstLeaf = true;
+  static constexpr bool kStrictBound = true;  ///< add() takes exactly d < bound()
+  float bound() const { return best_d; }
   bool done() const { return !(best_d > 0.0f); }  // distance 0 found: nothing can beat it
   void add(float d, std::uint32_t i) {
     if (d < best_d) {
@@ -79,6 +99,7 @@ struct KdTree<Dim>::RadiusSet {
   bool visit(float box_dist) const { return box_dist <= r_sq; }
   bool accepts(float d) const { return d <= r_sq; }
   static constexpr bool kFastFirstLeaf = false;
+  static constexpr bool kStrictBound = false;  ///< takes d <= r_sq: scanned one by one
   static bool done() { return false; }
   void add(float d, std::uint32_t i) {
     if (d <= r_sq) {
@@ -336,7 +357,33 @@ void KdTree<Dim>::scan_leaf(const Node& node, const float* q, Set& set) const {
     for (std::uint32_t j = 0; j < m && set.accepts(d); ++j) set.add(d, node.a + j);
     return;
   }
-  for (std::uint32_t j = 0; j < m; ++j) set.add(leaf_dist(x, m, j, q), node.a + j);
+  std::uint32_t j = 0;
+#if defined(__SSE2__)
+  if constexpr (Set::kStrictBound) {
+    // Four points per step, each lane summing exactly as leaf_dist does (bit-identical distances);
+    // only lanes below the set's bound reach add(), in order. The bound only shrinks, so a lane
+    // masked out here would have been rejected by add() too: the result is that of the plain
+    // loop, with one branch per four points (rarely taken once a kNN set is full) instead of one
+    // per point.
+    __m128 qv[Dim];
+    for (int k = 0; k < Dim; ++k) qv[k] = _mm_set1_ps(q[k]);
+    for (; j + 4 <= m; j += 4) {
+      __m128 d4 = _mm_setzero_ps();
+      for (int k = 0; k < Dim; ++k) {
+        const __m128 t = _mm_sub_ps(_mm_loadu_ps(x + static_cast<std::size_t>(k) * m + j), qv[k]);
+        d4 = _mm_add_ps(d4, _mm_mul_ps(t, t));
+      }
+      const int mask = _mm_movemask_ps(_mm_cmplt_ps(d4, _mm_set1_ps(set.bound())));
+      if (mask == 0) continue;
+      alignas(16) float d[4];
+      _mm_store_ps(d, d4);
+      for (std::uint32_t lane = 0; lane < 4; ++lane) {
+        if (mask & (1 << lane)) set.add(d[lane], node.a + j + lane);
+      }
+    }
+  }
+#endif
+  for (; j < m; ++j) set.add(leaf_dist(x, m, j, q), node.a + j);
 }
 
 // Depth-first search, nearer child first. box_d[k] holds the squared distance along dimension k
@@ -470,6 +517,21 @@ std::size_t KdTree<Dim>::knn(const Point& query, std::size_t k, std::size_t* ind
 }
 
 template <int Dim>
+std::size_t KdTree<Dim>::knn(const Point& query, std::size_t k, std::size_t* indices, float* sq_dists,
+                             float max_dist_sq) const {
+  k = std::min(k, size());
+  if (k == 0 || !query.allFinite() || !(max_dist_sq >= 0.0f)) return 0;
+  KnnSet set{indices, sq_dists, k};
+  // The set keeps d < worst: start one float above the limit so that d == max_dist_sq counts.
+  set.worst = detail::next_float_up(max_dist_sq);
+  float box_d[Dim];
+  if (!set.visit(root_box_dist(query.data(), box_d))) return 0;
+  search(query.data(), box_d, set);
+  for (std::size_t i = 0; i < set.count; ++i) indices[i] = ids_[indices[i]];
+  return set.count;
+}
+
+template <int Dim>
 std::size_t KdTree<Dim>::knn(const Point& query, std::size_t k, std::vector<std::size_t>& indices,
                              std::vector<float>& sq_dists) const {
   k = std::min(k, size());
@@ -496,13 +558,7 @@ std::optional<Neighbor> KdTree<Dim>::nearest(const Point& query, float max_dist_
   if (!query.allFinite() || !(max_dist_sq >= 0.0f)) return std::nullopt;
   // Accept d <= max_dist_sq: the set keeps d < best_d, so start one float above the limit.
   NnSet set;
-  set.best_d = max_dist_sq;
-  if (max_dist_sq < std::numeric_limits<float>::infinity()) {
-    std::uint32_t bits;
-    std::memcpy(&bits, &max_dist_sq, sizeof bits);
-    ++bits;
-    std::memcpy(&set.best_d, &bits, sizeof bits);
-  }
+  set.best_d = detail::next_float_up(max_dist_sq);
   float box_d[Dim];
   const float bound = root_box_dist(query.data(), box_d);
   if (!set.visit(bound)) return std::nullopt;
