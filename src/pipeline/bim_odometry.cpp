@@ -139,7 +139,9 @@ void BimOdometry::correct(const PointCloud& lidar_frame, BimFrameResult& out) {
   const auto t1 = std::chrono::steady_clock::now();
   out.anchor_attempted = true;
   const Eigen::Isometry3d T_pred = composer_.pose() * settings_.T_base_lidar;
-  const IcpResult icp = align_icp(keys, *bim_, *bim_tree_, T_pred, settings_.icp);
+  IcpSettings icp_settings = settings_.icp;
+  icp_settings.keep_correspondences = true;  // the information matrix below is built on them
+  const IcpResult icp = align_icp(keys, *bim_, *bim_tree_, T_pred, icp_settings);
   out.icp_status = icp.status;
   out.icp_overlap = icp.overlap;
   out.icp_inliers = icp.num_inliers;
@@ -151,20 +153,17 @@ void BimOdometry::correct(const PointCloud& lidar_frame, BimFrameResult& out) {
 
   // Information of the result from its final correspondences, first about the robot's position c
   // (so the rank test compares like with like), then moved to the world-origin left perturbation.
+  // ICP's final pairs: every key point within the final correspondence distance of the model.
   const Eigen::Isometry3d& T = icp.T_target_source;
   const Vector3d c = (T * settings_.T_base_lidar.inverse()).translation();
-  const float gate_sq = static_cast<float>(icp.final_correspondence_distance * icp.final_correspondence_distance);
   Matrix6d H = Matrix6d::Zero();
   std::size_t n = 0;
-  for (const Vector3f& p : keys.points) {
-    const Vector3f q = (T * p.cast<double>()).cast<float>();
-    const auto nb = bim_tree_->nearest(q, gate_sq);
-    if (!nb) continue;
-    const Vector3d normal = bim_->normals[nb->index].cast<double>();
+  for (const IcpCorrespondence& pair : icp.correspondences) {
+    const Vector3d normal = bim_->normals[pair.target_index].cast<double>();
     if (!normal.allFinite()) continue;
     Vector6d J;
     J.head<3>() = normal;
-    J.tail<3>() = (q.cast<double>() - c).cross(normal);
+    J.tail<3>() = (pair.x - c).cross(normal);
     H.noalias() += J * J.transpose();
     ++n;
   }

@@ -544,6 +544,24 @@ TEST(IcpTest, CachedIcpEqualsBruteForceIcpBitForBit) {
   EXPECT_EQ(r.num_inliers, pairs.size());
   EXPECT_GT(r.num_inliers, source.size() / 2);
   EXPECT_DOUBLE_EQ(r.rmse, std::sqrt(sum_sq / static_cast<double>(pairs.size())));
+  EXPECT_TRUE(r.correspondences.empty());  // not asked for
+
+  // keep_correspondences: the same run, and its final pairs are the brute-force ones.
+  s.keep_correspondences = true;
+  const IcpResult kept = align_icp(source, target, T_init, s);
+  EXPECT_EQ(kept.T_target_source.matrix(), r.T_target_source.matrix());
+  ASSERT_EQ(kept.correspondences.size(), pairs.size());
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const IcpCorrespondence& c = kept.correspondences[k];
+    EXPECT_EQ(c.x, pairs[k].x) << k;
+    EXPECT_EQ(c.q, pairs[k].q) << k;
+    ASSERT_LT(c.source_index, source.size());
+    ASSERT_LT(c.target_index, target.size());
+    EXPECT_EQ(c.q, target.points[c.target_index].cast<double>()) << k;
+    const Vector3f moved = T.linear().cast<float>() * source.points[c.source_index] + T.translation().cast<float>();
+    EXPECT_EQ(c.x, moved.cast<double>()) << k;
+    EXPECT_LE((c.x - c.q).norm(), d + 1e-6) << k;
+  }
 }
 
 }  // namespace

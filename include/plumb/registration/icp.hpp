@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -45,6 +46,18 @@ struct IcpSettings {
   /// smallest eigenvalue of the per-pair 6x6 normal matrix below which the result is
   /// Status::kDegenerate (0 disables the gate); see IcpResult::degeneracy
   double degeneracy_threshold = 0.0;
+  /// Return the final correspondences in IcpResult::correspondences (for a caller that needs
+  /// them, e.g. to build an information matrix, without searching the target again).
+  bool keep_correspondences = false;
+};
+
+/// @brief One final source-target pair of align_icp().
+struct IcpCorrespondence {
+  std::size_t source_index = 0;          ///< index in the source cloud
+  std::size_t target_index = 0;          ///< index in the target cloud
+  Eigen::Vector3d x = Eigen::Vector3d::Zero();  ///< the source point moved by T_target_source [m]
+  Eigen::Vector3d q = Eigen::Vector3d::Zero();  ///< its nearest target point [m]
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();  ///< target normal at q (point-to-plane), else zero
 };
 
 /// @brief Result of align_icp().
@@ -62,6 +75,8 @@ struct IcpResult {
   /// the final correspondences (rotation about their centroid, then translation). Near 0 means
   /// a direction the geometry does not constrain (corridor, single plane).
   double degeneracy = 0.0;
+  /// The num_inliers pairs at the final estimate, when settings.keep_correspondences (else empty).
+  std::vector<IcpCorrespondence> correspondences;
 };
 
 /// @brief Align `source` to `target` from `T_init` (SEEDS A1.6): nearest neighbours within d,

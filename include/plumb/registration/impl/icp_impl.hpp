@@ -27,6 +27,8 @@ struct IcpPair {
   Vector3d x;
   Vector3d q;
   Vector3d n;
+  std::size_t i = 0;  ///< source index
+  std::size_t j = 0;  ///< target index
 };
 
 inline void check_icp_settings(const IcpSettings& s) {
@@ -161,6 +163,8 @@ inline double icp_pairs(const PointCloud& source, const PointCloud& target, cons
       if (nt.allFinite() && ns.allFinite() && std::abs((R * ns).dot(nt)) < min_cos) continue;
     }
     IcpPair pr;
+    pr.i = i;
+    pr.j = j;
     pr.x = x.cast<double>();
     pr.q = target.points[j].cast<double>();
     if (point_to_plane) {
@@ -335,6 +339,10 @@ inline IcpResult align_icp(const PointCloud& source, const PointCloud& target, c
     }
     out.rmse = std::sqrt(sum_sq / static_cast<double>(pairs.size()));
     out.degeneracy = detail::icp_degeneracy(pairs, point_to_plane);
+  }
+  if (settings.keep_correspondences) {
+    out.correspondences.reserve(pairs.size());
+    for (const auto& pr : pairs) out.correspondences.push_back({pr.i, pr.j, pr.x, pr.q, pr.n});
   }
   if (failed) return out;
   if (!gate_passed) {
