@@ -69,7 +69,7 @@ class SacIaCandidates {
                   std::size_t k, bool mutual, bool weighted)
       : sf_(source_features), tf_(target_features), src_ids_(src_ids), k_(k), mutual_(mutual), weighted_(weighted),
         target_tree_(target_features, tgt_ids), cand_(src_ids.size() * k), weight_(src_ids.size() * k),
-        count_(src_ids.size(), kUnknown), dist_(k) {
+        count_(src_ids.size(), kUnknown), dist_(k), back_dist_(k) {
     if (mutual_) {
       source_tree_ = std::make_unique<FeatureKdTree<kFpfhBins>>(source_features, src_ids);
       back_.resize(target_features.size() * k);
@@ -112,10 +112,15 @@ class SacIaCandidates {
       std::size_t kept = 0;
       for (std::size_t m = 0; m < n; ++m) {
         const std::uint32_t j = c[m];
-        if (back_count_[j] == kUnknown)
-          back_count_[j] = static_cast<std::uint32_t>(source_tree_->knn(tf_[j].data(), k_, &back_[j * k_], dist_.data()));
+        if (back_count_[j] == kUnknown) {
+          back_count_[j] =
+              static_cast<std::uint32_t>(source_tree_->knn(tf_[j].data(), k_, &back_[j * k_], back_dist_.data()));
+        }
         const std::uint32_t* b = &back_[j * k_];
-        if (std::find(b, b + back_count_[j], i) != b + back_count_[j]) c[kept++] = j;
+        if (std::find(b, b + back_count_[j], i) != b + back_count_[j]) {
+          dist_[kept] = dist_[m];  // dist_ is the target query's, kept in step with c
+          c[kept++] = j;
+        }
       }
       n = kept;
     }
@@ -124,14 +129,8 @@ class SacIaCandidates {
     double* p = &weight_[a * k_];
     double f1_sq = std::numeric_limits<double>::infinity(), sum = 0.0;
     for (std::size_t m = 0; m < n; ++m) {
-      const std::uint32_t j = c[m];
-      double f_sq = 0.0;
-      for (std::size_t b = 0; b < kFpfhBins; ++b) {
-        const double e = static_cast<double>(sf_[src_ids_[a]][b]) - static_cast<double>(tf_[j][b]);
-        f_sq += e * e;
-      }
-      p[m] = f_sq;
-      f1_sq = std::min(f1_sq, f_sq);
+      p[m] = static_cast<double>(dist_[m]);  // squared feature distance from the knn query
+      f1_sq = std::min(f1_sq, p[m]);
     }
     for (std::size_t m = 0; m < n; ++m) {
       if (!weighted_) {
@@ -160,7 +159,7 @@ class SacIaCandidates {
   std::vector<double> weight_;
   std::vector<std::uint32_t> count_;
   std::vector<std::uint32_t> back_, back_count_;
-  std::vector<float> dist_;
+  std::vector<float> dist_, back_dist_;  // squared feature distances of the last target / source query
   std::vector<std::size_t> known_;
 };
 

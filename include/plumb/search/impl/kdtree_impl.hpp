@@ -506,14 +506,7 @@ void KdTree<Dim>::search_recursive(std::uint32_t node_id, const float* q, float*
 template <int Dim>
 std::size_t KdTree<Dim>::knn(const Point& query, std::size_t k, std::size_t* indices,
                              float* sq_dists) const {
-  k = std::min(k, size());
-  if (k == 0 || !query.allFinite()) return 0;
-  KnnSet set{indices, sq_dists, k};
-  float box_d[Dim];
-  root_box_dist(query.data(), box_d);
-  search(query.data(), box_d, set);
-  for (std::size_t i = 0; i < set.count; ++i) indices[i] = ids_[indices[i]];
-  return set.count;
+  return knn(query, k, indices, sq_dists, std::numeric_limits<float>::infinity());
 }
 
 template <int Dim>
