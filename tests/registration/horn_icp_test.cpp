@@ -505,6 +505,37 @@ TEST(IcpTest, NeighbourCacheGivesBruteForcePairs) {
   EXPECT_GT(total_pairs, 14 * source.size() / 2);  // the test is not vacuous
 }
 
+// The overlap ratio through the same cache (align_icp's gate, once per round) equals brute force
+// and overlap_ratio() exactly, interleaved with pair queries at other distances as in align_icp.
+TEST(IcpTest, CachedOverlapEqualsBruteForce) {
+  const auto [target, source] = cache_test_clouds();
+  const KdTree3f tree(target);
+  detail::IcpNnCache cache(source.size());
+  std::vector<detail::IcpPair> pairs;
+  IcpSettings s;
+  Rng rng(23);
+  Eigen::Isometry3d T = random_pose(rng, 0.3, 0.1);
+  const double betas[] = {0.1, 0.05, 0.3};
+  int call = 0;
+  double sum_overlap = 0.0;
+  for (double step : {0.3, 0.03, 3e-3, 1e-4, 1e-6, 0.0, 0.5, 1e-3, 0.0}) {
+    T = random_pose(rng, step, step / 3) * T;
+    detail::icp_pairs(source, target, tree, T, 0.6, s, pairs, cache);
+    const double beta = betas[call++ % 3];
+    const OverlapResult o = detail::icp_overlap(source, target, tree, T, beta, cache);
+    const OverlapResult ref = overlap_ratio(source, tree, T, beta);
+    double mse_ref = 0.0;
+    const std::size_t brute_inliers = brute_pairs(source, target, T, beta, mse_ref).size();
+    EXPECT_EQ(o.num_valid, source.size()) << "call " << call;
+    EXPECT_EQ(o.num_inliers, brute_inliers) << "call " << call;
+    EXPECT_EQ(o.num_inliers, ref.num_inliers) << "call " << call;
+    EXPECT_EQ(o.overlap, ref.overlap) << "call " << call;
+    EXPECT_EQ(o.rmse, ref.rmse) << "call " << call;
+    sum_overlap += o.overlap;
+  }
+  EXPECT_GT(sum_overlap, 0.3 * call);  // not vacuous: most calls find most points
+}
+
 // align_icp over several rounds (the overlap gate never passes, so d shrinks from 0.6 to 0.2 m and
 // the cache lives through all of them) equals plain ICP written here on brute-force pairs: the
 // same pose bit for bit, the same iterations, inliers and RMSE.
@@ -545,6 +576,8 @@ TEST(IcpTest, CachedIcpEqualsBruteForceIcpBitForBit) {
   EXPECT_GT(r.num_inliers, source.size() / 2);
   EXPECT_DOUBLE_EQ(r.rmse, std::sqrt(sum_sq / static_cast<double>(pairs.size())));
   EXPECT_TRUE(r.correspondences.empty());  // not asked for
+  // The gate's overlap (through the cache) is overlap_ratio() at the result.
+  EXPECT_EQ(r.overlap, overlap_ratio(source, KdTree3f(target), r.T_target_source, s.overlap_distance).overlap);
 
   // keep_correspondences: the same run, and its final pairs are the brute-force ones.
   s.keep_correspondences = true;

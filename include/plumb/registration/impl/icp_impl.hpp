@@ -82,10 +82,11 @@ class IcpNnCache {
   std::vector<Entry> entries_;
 };
 
-/// Nearest-neighbour pairs of the source under T within distance d (SEEDS A1.6 steps 1-2).
-/// Returns the mean squared residual of the metric.
+/// Nearest target point of x, the source point whose cache entry is `c`, when it lies within d
+/// (d_sq: the caller's float d^2): returns its squared distance and sets j, or returns +inf when no
+/// target point is within d.
 ///
-/// `cache` (see IcpNnCache) replaces most kd-tree queries by an exact test. A point at x that was
+/// The cache (see IcpNnCache) replaces most kd-tree queries by an exact test. A point at x that was
 /// last queried at x_ref has moved by delta = |x - x_ref|; by the triangle inequality every
 /// uncached target point is at least lim = r - delta from x. So
 /// - when the best cached point is within lim, it is the nearest neighbour (no query);
@@ -93,69 +94,69 @@ class IcpNnCache {
 ///   this also keeps far points of a partial overlap from being searched every iteration);
 /// - otherwise a new kNN query at x refreshes the entry, bounded by the farthest cached point
 ///   (K points lie within it) and by 2d (farther points never pair; r is then at least 2d).
+/// Any d may be asked of the same cache (the entry's r records how far it is complete).
 /// Cached distances are summed as the kd-tree sums them (detail::dist_sq) and lim keeps a margin
-/// far above float rounding, so the pairs and residuals are bit-identical to plain nearest()
-/// queries within d, except which of several points at exactly the same float distance is taken
-/// (the kd-tree leaves that unspecified too; duplicated target points are the common case, and
-/// there the choice cannot change the result).
+/// far above float rounding, so the result is bit-identical to a plain nearest() query within d,
+/// except which of several points at exactly the same float distance is taken (the kd-tree leaves
+/// that unspecified too; duplicated target points are the common case, and there the choice
+/// cannot change the result).
+inline float cached_nearest(const PointCloud& target, const KdTree3f& tree, const Vector3f& x, float d, float d_sq,
+                            IcpNnCache::Entry& c, std::uint32_t& j) {
+  constexpr std::size_t K = IcpNnCache::kK;
+  float best = std::numeric_limits<float>::infinity();
+  float worst = 0.0f;
+  j = std::numeric_limits<std::uint32_t>::max();
+  for (std::uint32_t k = 0; k < c.count; ++k) {
+    const float dk = detail::dist_sq<3>(target.points[c.idx[k]].data(), x.data());
+    if (dk < best) {
+      best = dk;
+      j = c.idx[k];
+    }
+    worst = std::max(worst, dk);
+  }
+  if (c.r > 0.0f) {
+    // The margin covers float rounding of the coordinate differences and distances (~1e-7
+    // relative to the coordinates), with a wide safety factor; it costs a few hits at most.
+    const float slack = 1e-5f * (1.0f + x.cwiseAbs().maxCoeff() + c.r);
+    const float lim = c.r - (x - c.x_ref).norm() - slack;
+    if (lim > 0.0f && best <= lim * lim) return best <= d_sq ? best : std::numeric_limits<float>::infinity();
+    if (lim > d) return std::numeric_limits<float>::infinity();  // best > lim^2 > d^2, the rest beyond lim
+  }
+  std::size_t knn_idx[K];
+  float knn_d[K];
+  const float far_sq = 4.0f * d_sq;
+  const float bound = c.count == K ? std::min(far_sq, worst) : far_sq;
+  const std::size_t n = tree.knn(x, K, knn_idx, knn_d, bound);
+  c.x_ref = x;
+  c.count = static_cast<std::uint32_t>(n);
+  for (std::size_t k = 0; k < n; ++k) c.idx[k] = static_cast<std::uint32_t>(knn_idx[k]);
+  c.r = std::sqrt(n == K ? knn_d[K - 1] : bound);
+  if (n == 0 || !(knn_d[0] <= d_sq)) return std::numeric_limits<float>::infinity();
+  j = c.idx[0];
+  return knn_d[0];
+}
+
+/// Nearest-neighbour pairs of the source under T within distance d (SEEDS A1.6 steps 1-2), through
+/// `cache` (cached_nearest). Returns the mean squared residual of the metric.
 inline double icp_pairs(const PointCloud& source, const PointCloud& target, const KdTree3f& tree,
                         const Eigen::Isometry3d& T, double d, const IcpSettings& s,
                         std::vector<IcpPair>& pairs, IcpNnCache& cache) {
-  constexpr std::size_t K = IcpNnCache::kK;
-  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
   pairs.clear();
   const Eigen::Matrix3f R = T.linear().cast<float>();
   const Eigen::Vector3f t = T.translation().cast<float>();
   const float d_f = static_cast<float>(d);
   const float d_sq = static_cast<float>(d * d);
-  const float far_sq = 4.0f * d_sq;
   const bool point_to_plane = s.method == IcpMethod::kPointToPlane;
   const bool check_angle = source.has_normals() && target.has_normals() && s.max_normal_angle < 1.5707963;
   const float min_cos = static_cast<float>(std::cos(s.max_normal_angle));
-  std::size_t knn_idx[K];
-  float knn_d[K];
   double sum_sq = 0.0;
   for (std::size_t i = 0; i < source.points.size(); ++i) {
     const Vector3f& p = source.points[i];
     if (!p.allFinite()) continue;
     const Vector3f x = R * p + t;
-    IcpNnCache::Entry& c = cache[i];
-    float best = std::numeric_limits<float>::infinity();
-    float worst = 0.0f;
-    std::uint32_t best_j = kNone;
-    for (std::uint32_t k = 0; k < c.count; ++k) {
-      const float dk = detail::dist_sq<3>(target.points[c.idx[k]].data(), x.data());
-      if (dk < best) {
-        best = dk;
-        best_j = c.idx[k];
-      }
-      worst = std::max(worst, dk);
-    }
-    bool known = false;
-    if (c.r > 0.0f) {
-      // The margin covers float rounding of the coordinate differences and distances (~1e-7
-      // relative to the coordinates), with a wide safety factor; it costs a few hits at most.
-      const float slack = 1e-5f * (1.0f + x.cwiseAbs().maxCoeff() + c.r);
-      const float lim = c.r - (x - c.x_ref).norm() - slack;
-      if (lim > 0.0f && best <= lim * lim) {
-        known = true;  // the best cached point is the nearest
-      } else if (lim > d_f) {
-        known = true;  // best > lim^2 > d^2 and every other point is beyond lim: no pair
-        best = std::numeric_limits<float>::infinity();
-      }
-    }
-    if (!known) {
-      const float bound = c.count == K ? std::min(far_sq, worst) : far_sq;
-      const std::size_t n = tree.knn(x, K, knn_idx, knn_d, bound);
-      c.x_ref = x;
-      c.count = static_cast<std::uint32_t>(n);
-      for (std::size_t k = 0; k < n; ++k) c.idx[k] = static_cast<std::uint32_t>(knn_idx[k]);
-      c.r = std::sqrt(n == K ? knn_d[K - 1] : bound);
-      best = n > 0 ? knn_d[0] : std::numeric_limits<float>::infinity();
-      best_j = n > 0 ? c.idx[0] : kNone;
-    }
+    std::uint32_t j = 0;
+    const float best = cached_nearest(target, tree, x, d_f, d_sq, cache[i], j);
     if (!(best <= d_sq)) continue;
-    const std::size_t j = best_j;
     if (check_angle) {
       const Vector3f& nt = target.normals[j];
       const Vector3f& ns = source.normals[i];
@@ -180,6 +181,32 @@ inline double icp_pairs(const PointCloud& source, const PointCloud& target, cons
     pairs.push_back(pr);
   }
   return pairs.empty() ? 0.0 : sum_sq / static_cast<double>(pairs.size());
+}
+
+/// overlap_ratio() of the source under T through the ICP's neighbour cache: the same result (see
+/// cached_nearest), without a kd-tree query for most points.
+inline OverlapResult icp_overlap(const PointCloud& source, const PointCloud& target, const KdTree3f& tree,
+                                 const Eigen::Isometry3d& T, double beta, IcpNnCache& cache) {
+  OverlapResult out;
+  const Eigen::Matrix3f R = T.linear().cast<float>();
+  const Eigen::Vector3f t = T.translation().cast<float>();
+  const float beta_f = static_cast<float>(beta);
+  const float beta_sq = static_cast<float>(beta * beta);
+  double sum_sq = 0.0;
+  for (std::size_t i = 0; i < source.points.size(); ++i) {
+    const Vector3f& p = source.points[i];
+    if (!p.allFinite()) continue;
+    ++out.num_valid;
+    std::uint32_t j = 0;
+    const float best = cached_nearest(target, tree, R * p + t, beta_f, beta_sq, cache[i], j);
+    if (best <= beta_sq) {
+      ++out.num_inliers;
+      sum_sq += best;
+    }
+  }
+  if (out.num_valid > 0) out.overlap = static_cast<double>(out.num_inliers) / static_cast<double>(out.num_valid);
+  if (out.num_inliers > 0) out.rmse = std::sqrt(sum_sq / static_cast<double>(out.num_inliers));
+  return out;
 }
 
 inline double icp_residual(const IcpPair& pr, bool point_to_plane) {
@@ -319,7 +346,7 @@ inline IcpResult align_icp(const PointCloud& source, const PointCloud& target, c
     }
     if (failed) break;
     // SEEDS A1.6 step 4: accept when the overlap ratio reaches c, else shrink d and run again.
-    out.overlap = overlap_ratio(source, target_tree, T, settings.overlap_distance).overlap;
+    out.overlap = detail::icp_overlap(source, target, target_tree, T, settings.overlap_distance, cache).overlap;
     if (out.overlap >= settings.min_overlap) {
       gate_passed = true;
       break;
