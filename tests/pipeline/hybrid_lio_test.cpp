@@ -108,7 +108,9 @@ TEST_F(HybridLioSiteTest, EveryModeStaysNearTheGroundTruth) {
   // 1.06 m at the end, worst 1.27 m, yaw 1.9 deg (no deskew at up to 1.5 m/s, constant-velocity
   // prediction); loam-imu 0.44 m, worst 0.56 m, yaw 1.1 deg; the hybrid finds hundreds of wall
   // planes in every frame here, so it runs LOAM throughout and equals loam-imu. A broken deskew,
-  // Jacobian or prior sends the estimate metres away within a few frames.
+  // Jacobian or prior sends the estimate metres away within a few frames. (Since the map planes are
+  // fitted on 10 neighbours within 5 cm, Release measures much less: LiDAR only 0.025 m at the end,
+  // worst 0.156 m; loam-imu 0.033 m, worst 0.056 m. The bounds stay where they were.)
   const struct {
     LioMode mode;
     double max_end, max_any, max_yaw_deg;
