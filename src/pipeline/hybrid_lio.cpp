@@ -131,6 +131,10 @@ HybridLio::HybridLio(const Eigen::Isometry3d& T_world_base0, const HybridLioSett
               "HybridLio: settings.max_correspondence_distance must be > 0");
   PLUMB_CHECK(s.map_neighbors >= 3 && s.map_neighbors <= 64,
               "HybridLio: settings.map_neighbors must be in [3, 64], got " << s.map_neighbors);
+  PLUMB_CHECK(std::isfinite(s.map_plane_tolerance) && s.map_plane_tolerance > 0.0,
+              "HybridLio: settings.map_plane_tolerance must be > 0 [m], got " << s.map_plane_tolerance);
+  PLUMB_CHECK(s.map_edge_ratio >= 1.0 && s.map_plane_ratio >= 1.0,
+              "HybridLio: settings.map_edge_ratio / map_plane_ratio must be >= 1 (eigenvalue ratios)");
   PLUMB_CHECK(s.plane_sigma > 0.0 && s.edge_sigma > 0.0 && s.point_sigma > 0.0 && s.huber_scale > 0.0,
               "HybridLio: settings.plane_sigma / edge_sigma / point_sigma / huber_scale must be > 0");
   PLUMB_CHECK(s.min_correspondences >= 6, "HybridLio: settings.min_correspondences must be >= 6");

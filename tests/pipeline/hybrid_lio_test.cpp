@@ -345,6 +345,14 @@ TEST(HybridLioTest, BadSettingsAndNamesThrow) {
   s.map_neighbors = 2;
   EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
   s = {};
+  s.map_plane_tolerance = 0.0;
+  EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
+  s.map_plane_tolerance = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
+  s = {};
+  s.map_plane_ratio = 0.5;
+  EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
+  s = {};
   s.plane_sigma = 0.0;
   EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
   s = {};

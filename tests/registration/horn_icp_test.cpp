@@ -473,16 +473,26 @@ std::pair<PointCloud, PointCloud> cache_test_clouds() {
   return {target, source};
 }
 
+/// What the neighbour-cache tests share: the clouds above, the target's kd-tree, one cache that
+/// lives through the whole pose sequence, the pair buffer and default settings.
+class IcpCacheTest : public ::testing::Test {
+ protected:
+  IcpCacheTest() : clouds_(cache_test_clouds()), tree(clouds_.first), cache(clouds_.second.size()) {}
+
+  std::pair<PointCloud, PointCloud> clouds_;
+  const PointCloud& target = clouds_.first;
+  const PointCloud& source = clouds_.second;
+  KdTree3f tree;
+  detail::IcpNnCache cache;
+  std::vector<detail::IcpPair> pairs;
+  IcpSettings s;
+};
+
 // One cache through a sequence of poses whose steps shrink from 0.3 m to 1e-6 m (as in ICP), then
 // jump, with d changing between calls: every call's pairs (and their order) and mean squared
 // residual equal brute force exactly. Equally distant target points are exact duplicates here, so
 // the tie that the cache may break differently cannot show.
-TEST(IcpTest, NeighbourCacheGivesBruteForcePairs) {
-  const auto [target, source] = cache_test_clouds();
-  const KdTree3f tree(target);
-  detail::IcpNnCache cache(source.size());
-  std::vector<detail::IcpPair> pairs;
-  IcpSettings s;
+TEST_F(IcpCacheTest, NeighbourCacheGivesBruteForcePairs) {
   Rng rng(17);
   Eigen::Isometry3d T = random_pose(rng, 0.3, 0.1);
   const double ds[] = {1.0, 0.5, 0.2, 0.35};
@@ -507,12 +517,7 @@ TEST(IcpTest, NeighbourCacheGivesBruteForcePairs) {
 
 // The overlap ratio through the same cache (align_icp's gate, once per round) equals brute force
 // and overlap_ratio() exactly, interleaved with pair queries at other distances as in align_icp.
-TEST(IcpTest, CachedOverlapEqualsBruteForce) {
-  const auto [target, source] = cache_test_clouds();
-  const KdTree3f tree(target);
-  detail::IcpNnCache cache(source.size());
-  std::vector<detail::IcpPair> pairs;
-  IcpSettings s;
+TEST_F(IcpCacheTest, CachedOverlapEqualsBruteForce) {
   Rng rng(23);
   Eigen::Isometry3d T = random_pose(rng, 0.3, 0.1);
   const double betas[] = {0.1, 0.05, 0.3};
