@@ -3,6 +3,7 @@
 // collinear "planes".
 #include "plumb/loam/local_map.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -67,6 +68,69 @@ TEST(VoxelHashMapTest, PruneDropsFarVoxelsAndKeepsTheNearestWithinTheCap) {
   map.prune(Vector3d(100.0, 0.0, 0.0));
   EXPECT_TRUE(map.empty());
   EXPECT_EQ(map.num_voxels(), 0u);
+}
+
+// max_age: a window of frames moving along x, each inserted then pruned; the map equals an
+// independent model of "voxels that got a point in the last max_age prunes, with their points"
+// after every frame. Full voxels age too and are refilled afresh once dropped.
+TEST(VoxelHashMapTest, MaxAgeKeepsWhatRecentFramesFilled) {
+  VoxelHashMapSettings s;
+  s.voxel_size = 1.0;
+  s.max_points_per_voxel = 2;
+  s.max_distance = 1e6;
+  s.max_age = 3;
+  VoxelHashMap map(s);
+  struct Model {
+    std::vector<Vector3f> points;
+    int last = 0;
+  };
+  std::map<std::tuple<int, int, int>, Model> model;
+  Rng rng(11);
+  std::size_t dropped_full = 0;
+  for (int frame = 0; frame < 40; ++frame) {
+    // Frames overlap: each covers x in [0.5 f, 0.5 f + 4) and revisits the origin every 10 frames.
+    const double x0 = frame % 10 == 9 ? 0.0 : 0.5 * frame;
+    std::vector<Vector3f> pts;
+    for (int i = 0; i < 60; ++i)
+      pts.emplace_back(static_cast<float>(rng.uniform(x0, x0 + 4.0)), static_cast<float>(rng.uniform(0.0, 2.0)), 0.5f);
+    map.insert(pts);
+    for (const Vector3f& p : pts) {
+      const auto k = std::make_tuple(static_cast<int>(std::floor(p.x())), static_cast<int>(std::floor(p.y())), 0);
+      Model& m = model[k];
+      if (m.points.size() < 2) {
+        m.points.push_back(p);
+        m.last = frame;
+      }
+    }
+    map.prune(Vector3d::Zero());
+    for (auto it = model.begin(); it != model.end();) {
+      if (frame - it->second.last >= 3) {
+        dropped_full += it->second.points.size() == 2 ? 1 : 0;
+        it = model.erase(it);
+      } else {
+        ++it;
+      }
+    }
+    std::size_t n = 0;
+    for (const auto& kv : model) n += kv.second.points.size();
+    ASSERT_EQ(map.num_voxels(), model.size()) << "frame " << frame;
+    ASSERT_EQ(map.num_points(), n) << "frame " << frame;
+    std::vector<Vector3f> got = map.points(), want;
+    for (const auto& kv : model) want.insert(want.end(), kv.second.points.begin(), kv.second.points.end());
+    auto less = [](const Vector3f& a, const Vector3f& b) {
+      return std::make_tuple(a.x(), a.y(), a.z()) < std::make_tuple(b.x(), b.y(), b.z());
+    };
+    std::sort(got.begin(), got.end(), less);
+    std::sort(want.begin(), want.end(), less);
+    ASSERT_EQ(got, want) << "frame " << frame;
+  }
+  EXPECT_GT(dropped_full, 10u);  // full voxels did age out (and the revisits refilled some)
+  // No age limit: nothing is ever dropped near the centre.
+  s.max_age = 0;
+  VoxelHashMap keep(s);
+  keep.insert({Vector3f(0.5f, 0.5f, 0.5f)});
+  for (int i = 0; i < 100; ++i) keep.prune(Vector3d::Zero());
+  EXPECT_EQ(keep.num_points(), 1u);
 }
 
 TEST(VoxelHashMapTest, BadSettingsThrow) {

@@ -25,6 +25,11 @@ struct VoxelHashMapSettings {
   int max_points_per_voxel = 10;    ///< a full voxel ignores further points, >= 1
   double max_distance = 80.0;       ///< prune() drops voxels whose centre is farther than this [m]
   std::size_t max_voxels = 200000;  ///< prune() also drops the farthest voxels beyond this count
+  /// prune() also drops voxels that got no new point in this many prune() calls (one per frame in
+  /// HybridLio), full ones included, so that the next frames fill them afresh: a map of what was
+  /// seen recently, like LeGO-LOAM's window of recent keyframes, instead of everything ever seen
+  /// within max_distance (which, on a route that comes back, closes the loop). 0: no age limit.
+  std::size_t max_age = 0;
 };
 
 /// @brief Points in a voxel hash map (SEEDS B: the local map of the tightly coupled estimator).
@@ -55,25 +60,30 @@ class VoxelHashMap {
       auto it = index_.find(k);
       if (it == index_.end()) {
         it = index_.emplace(k, voxels_.size()).first;
-        voxels_.push_back({k, {}});
+        voxels_.push_back({k, {}, generation_});
         voxels_.back().points.reserve(static_cast<std::size_t>(settings_.max_points_per_voxel));
       }
       Voxel& v = voxels_[it->second];
       if (static_cast<int>(v.points.size()) >= settings_.max_points_per_voxel) continue;
       v.points.push_back(p);
+      v.touched = generation_;
       ++num_points_;
     }
   }
 
-  /// @brief Drop voxels farther than max_distance from `center`, then the farthest ones beyond max_voxels.
+  /// @brief Drop voxels farther than max_distance from `center` or older than max_age, then the
+  ///        farthest ones beyond max_voxels; then start the next age step.
   void prune(const Vector3d& center) {
     const double max_sq = settings_.max_distance * settings_.max_distance;
+    const std::uint64_t max_age = settings_.max_age;
     std::vector<std::pair<double, std::size_t>> keep;
     keep.reserve(voxels_.size());
     for (std::size_t i = 0; i < voxels_.size(); ++i) {
       const double d_sq = (center_of(voxels_[i].key) - center).squaredNorm();
-      if (d_sq <= max_sq) keep.emplace_back(d_sq, i);
+      const bool recent = max_age == 0 || generation_ - voxels_[i].touched < max_age;
+      if (d_sq <= max_sq && recent) keep.emplace_back(d_sq, i);
     }
+    ++generation_;
     if (keep.size() > settings_.max_voxels) {
       std::stable_sort(keep.begin(), keep.end(),
                        [](const auto& a, const auto& b) { return a.first < b.first; });
@@ -106,6 +116,7 @@ class VoxelHashMap {
     voxels_.clear();
     index_.clear();
     num_points_ = 0;
+    generation_ = 0;
   }
 
  private:
@@ -124,6 +135,7 @@ class VoxelHashMap {
   struct Voxel {
     Key key;
     std::vector<Vector3f> points;
+    std::uint64_t touched = 0;  ///< the age step of the voxel's newest point
   };
 
   Key key_of(const Vector3f& p) const {
@@ -142,6 +154,7 @@ class VoxelHashMap {
   std::vector<Voxel> voxels_;
   std::unordered_map<Key, std::size_t, KeyHash> index_;
   std::size_t num_points_ = 0;
+  std::uint64_t generation_ = 0;  ///< prune() calls so far: the age step that insert() stamps
 };
 
 }  // namespace plumb
