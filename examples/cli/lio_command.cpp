@@ -34,6 +34,7 @@ struct LioOptions {
   std::size_t max_frames = 0;
   std::size_t min_plane_points = 48;
   bool no_deskew = false;
+  int map_window = 0;
 };
 
 void run(const LioOptions& o) {
@@ -49,6 +50,7 @@ void run(const LioOptions& o) {
   s.T_base_imu = dump.meta().T_base_imu;
   s.min_plane_points = o.min_plane_points;
   s.deskew = !o.no_deskew;
+  s.edge_map.max_age = s.plane_map.max_age = s.point_map.max_age = static_cast<std::size_t>(o.map_window);
   for (double e : dump.meta().lidar.elevations_rad) s.image.vertical_angles_deg.push_back(e * 180.0 / 3.14159265358979323846);
 
   const std::size_t n = o.max_frames > 0 ? std::min(o.max_frames, dump.num_frames()) : dump.num_frames();
@@ -102,6 +104,7 @@ void run(const LioOptions& o) {
   j["dump"] = o.dump_dir;
   j["mode"] = to_string(mode);
   j["frames"] = n;
+  j["map_window"] = o.map_window;
   j["frames_per_mode"] = {{"init", count[static_cast<int>(LioFrameMode::kInit)]},
                           {"loam", count[static_cast<int>(LioFrameMode::kLoam)]},
                           {"icp", count[static_cast<int>(LioFrameMode::kIcp)]},
@@ -182,10 +185,16 @@ void register_lio_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("-o,--output", o->out_dir, "Output directory")->required();
   cmd->add_flag("--json", o->json, "Print the report as JSON");
-  cmd->add_option("--max-frames", o->max_frames, "Process only the first N frames");
+  // Unsigned options would take "-3" as a huge count: the checks reject negative input.
+  cmd->add_option("--max-frames", o->max_frames, "Process only the first N frames")->check(CLI::NonNegativeNumber);
   cmd->add_option("--min-plane-points", o->min_plane_points, "Hybrid switch: fewer plane points off the ground -> ICP")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--no-deskew", o->no_deskew, "Do not undo the motion distortion of the frames");
+  cmd->add_option("--map-window", o->map_window,
+                  "Local maps keep only what the last N frames filled (no implicit loop closure when the "
+                  "route comes back; 0: everything within 60 m)")
+      ->check(CLI::Range(0, 1000000000));
   cmd->callback([o]() { run(*o); });
 }
 

@@ -88,6 +88,16 @@ TEST_F(LioCliTest, HybridWritesTrajectoryAndReport) {
   EXPECT_LT(end, 1.0);  // failure bound over the ~3 m driven
   EXPECT_NEAR(j.at("end_error").get<double>(), end, 1e-4);
   EXPECT_NEAR(j.at("path_length").get<double>(), 3.0, 0.5);
+  EXPECT_EQ(j.at("map_window").get<std::size_t>(), 0u);
+
+  // --map-window: maps of the last 5 frames only; still a valid run, and the report says so.
+  const test::RunResult w = run_cli("lio '" + dir_ + "' --mode hybrid --map-window 5 -o '" + out + "' --json");
+  ASSERT_EQ(w.exit_code, 0) << w.err;
+  const Json jw = Json::parse(w.out);
+  EXPECT_EQ(jw.at("map_window").get<std::size_t>(), 5u);
+  EXPECT_EQ(jw.at("frames").get<std::size_t>(), n);
+  EXPECT_LT(jw.at("end_error").get<double>(), 1.0);
+  EXPECT_NE(run_cli("lio '" + dir_ + "' --map-window -3 -o '" + out + "'").exit_code, 0);
 }
 
 TEST_F(LioCliTest, LoamNeedsNoImuAndStartsAtIdentityWithoutGroundTruth) {
@@ -118,6 +128,10 @@ TEST_F(LioCliTest, RejectsBadOptionsAndMissingDumps) {
   test::RunResult r = run_cli("lio '" + dir_ + "' --mode lego -o '" + out + "'");
   EXPECT_NE(r.exit_code, 0);
   r = run_cli("lio '" + dir_ + "' --mode hybrid");
+  EXPECT_NE(r.exit_code, 0);
+  r = run_cli("lio '" + dir_ + "' --max-frames -3 -o '" + out + "'");
+  EXPECT_NE(r.exit_code, 0);
+  r = run_cli("lio '" + dir_ + "' --min-plane-points -1 -o '" + out + "'");
   EXPECT_NE(r.exit_code, 0);
   r = run_cli("lio '" + test::temp_path("no_such_dump") + "' -o '" + out + "'");
   EXPECT_NE(r.exit_code, 0);
