@@ -8,9 +8,11 @@
 #include <optional>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 
 #include "plumb/core/error.hpp"
 #include "plumb/core/lie.hpp"
+#include "plumb/loam/ground.hpp"
 #include "plumb/loam/odometry.hpp"
 #include "plumb/search/kdtree.hpp"
 
@@ -41,9 +43,12 @@ double huber_weight(double s, double k) { return s <= k * k ? 1.0 : k / std::sqr
 
 /// The LiDAR residuals of SEEDS eq. 6, 7, 20 as functions of the IMU state j: a query point s in
 /// the IMU frame maps to q = R s + p; Jacobians w.r.t. [dphi, dp] (right perturbation of R, p + dp).
-/// Returns 1/2 sum rho; adds the IRLS-weighted normal equations when H is not null.
-double lidar_terms(const std::vector<LoamCorrespondence>& corr, const std::vector<Vector3d>& s_imu, const ImuState& x,
-                   const HybridLioSettings& set, Matrix6d* H, Vector6d* g, double* sum_sq) {
+/// scale[k] multiplies correspondence k's whitened residual (1: its kind's sigma). Returns 1/2 sum
+/// rho; adds the IRLS-weighted normal equations, and to sum_sq the squared residuals [m^2], when H
+/// is not null.
+double lidar_terms(const std::vector<LoamCorrespondence>& corr, const std::vector<double>& scale,
+                   const std::vector<Vector3d>& s_imu, const ImuState& x, const HybridLioSettings& set, Matrix6d* H,
+                   Vector6d* g, double* sum_sq) {
   const Matrix3d& R = x.R_world_body;
   const Vector3d& p = x.p_world_body;
   double cost = 0.0;
@@ -56,8 +61,9 @@ double lidar_terms(const std::vector<LoamCorrespondence>& corr, const std::vecto
       Jq.rightCols<3>().setIdentity();
     }
     if (c.kind == LoamCorrespondence::Kind::kPlane) {
-      const double inv = 1.0 / set.plane_sigma;
-      const double r = inv * c.dir.dot(q - c.a);
+      const double inv = scale[k] / set.plane_sigma;
+      const double d = c.dir.dot(q - c.a);
+      const double r = inv * d;
       const double s = r * r;
       cost += 0.5 * huber_rho(s, set.huber_scale);
       if (H != nullptr) {
@@ -65,13 +71,13 @@ double lidar_terms(const std::vector<LoamCorrespondence>& corr, const std::vecto
         const double w = huber_weight(s, set.huber_scale);
         H->noalias() += w * J.transpose() * J;
         g->noalias() += w * J.transpose() * r;
-        *sum_sq += s * set.plane_sigma * set.plane_sigma;
+        *sum_sq += d * d;
       }
     } else {
       const bool edge = c.kind == LoamCorrespondence::Kind::kEdge;
-      const double sigma = edge ? set.edge_sigma : set.point_sigma;
-      const double inv = 1.0 / sigma;
-      const Vector3d r = edge ? Vector3d(inv * c.dir.cross(q - c.a)) : Vector3d(inv * (q - c.a));
+      const double inv = scale[k] / (edge ? set.edge_sigma : set.point_sigma);
+      const Vector3d d = edge ? Vector3d(c.dir.cross(q - c.a)) : Vector3d(q - c.a);
+      const Vector3d r = inv * d;
       const double s = r.squaredNorm();
       cost += 0.5 * huber_rho(s, set.huber_scale);
       if (H != nullptr) {
@@ -79,11 +85,52 @@ double lidar_terms(const std::vector<LoamCorrespondence>& corr, const std::vecto
         const double w = huber_weight(s, set.huber_scale);
         H->noalias() += w * J.transpose() * J;
         g->noalias() += w * J.transpose() * r;
-        *sum_sq += s * sigma * sigma;
+        *sum_sq += d.squaredNorm();
       }
     }
   }
   return cost;
+}
+
+/// IcpMetric::kPointToDistribution pairs: each point of `cur`, moved by T_map_cur, against the mean
+/// and covariance of its icp_neighbors nearest map points within max_correspondence_distance (at
+/// least 3 of them). A pair becomes three kPlane correspondences, one along each covariance axis,
+/// whose scale turns the plane residual's 1 / plane_sigma into 1 / sqrt(lambda + point_sigma^2):
+/// together the Mahalanobis distance of the point. Appends to corr / scale; returns the pairs.
+std::size_t associate_distributions(const PointCloud& map, const KdTree3f& tree, const PointCloud& cur,
+                                    const Eigen::Isometry3d& T_map_cur, const HybridLioSettings& set,
+                                    std::vector<LoamCorrespondence>& corr, std::vector<double>& scale) {
+  const std::size_t k = static_cast<std::size_t>(set.icp_neighbors);
+  std::size_t idx[64];
+  float d2[64];
+  const float max_sq = static_cast<float>(set.max_correspondence_distance * set.max_correspondence_distance);
+  const Eigen::Matrix3f R = T_map_cur.linear().cast<float>();
+  const Eigen::Vector3f t = T_map_cur.translation().cast<float>();
+  const double var0 = set.point_sigma * set.point_sigma;
+  std::size_t pairs = 0;
+  for (const Vector3f& p : cur.points) {
+    if (!p.allFinite()) continue;
+    const std::size_t m = tree.knn(R * p + t, k, idx, d2, max_sq);
+    if (m < 3) continue;
+    Vector3d mean = Vector3d::Zero();
+    for (std::size_t i = 0; i < m; ++i) mean += map.points[idx[i]].cast<double>();
+    mean /= static_cast<double>(m);
+    Matrix3d cov = Matrix3d::Zero();
+    for (std::size_t i = 0; i < m; ++i) {
+      const Vector3d d = map.points[idx[i]].cast<double>() - mean;
+      cov.noalias() += d * d.transpose();
+    }
+    cov /= static_cast<double>(m);
+    Eigen::SelfAdjointEigenSolver<Matrix3d> eig;
+    eig.computeDirect(cov);
+    for (int a = 0; a < 3; ++a) {
+      const double lambda = std::max(eig.eigenvalues()(a), 0.0);
+      corr.push_back({LoamCorrespondence::Kind::kPlane, p.cast<double>(), mean, eig.eigenvectors().col(a)});
+      scale.push_back(set.plane_sigma / std::sqrt(lambda + var0));
+    }
+    ++pairs;
+  }
+  return pairs;
 }
 
 void check_map_settings(const VoxelHashMapSettings& m, const char* name) {
@@ -108,6 +155,16 @@ const char* to_string(LioMode mode) {
     case LioMode::kHybrid: return "hybrid";
   }
   return "unknown";
+}
+
+const char* to_string(IcpMetric metric) {
+  return metric == IcpMetric::kPointToDistribution ? "point-to-distribution" : "point-to-point";
+}
+
+IcpMetric icp_metric_from_string(const std::string& name) {
+  if (name == "point-to-point") return IcpMetric::kPointToPoint;
+  if (name == "point-to-distribution") return IcpMetric::kPointToDistribution;
+  PLUMB_THROW("unknown ICP metric '" << name << "' (known: point-to-point, point-to-distribution)");
 }
 
 const char* to_string(LioFrameMode mode) {
@@ -137,6 +194,8 @@ HybridLio::HybridLio(const Eigen::Isometry3d& T_world_base0, const HybridLioSett
               "HybridLio: settings.map_edge_ratio / map_plane_ratio must be >= 1 (eigenvalue ratios)");
   PLUMB_CHECK(s.plane_sigma > 0.0 && s.edge_sigma > 0.0 && s.point_sigma > 0.0 && s.huber_scale > 0.0,
               "HybridLio: settings.plane_sigma / edge_sigma / point_sigma / huber_scale must be > 0");
+  PLUMB_CHECK(s.icp_neighbors >= 3 && s.icp_neighbors <= 64,
+              "HybridLio: settings.icp_neighbors must be in [3, 64], got " << s.icp_neighbors);
   PLUMB_CHECK(s.min_correspondences >= 6, "HybridLio: settings.min_correspondences must be >= 6");
   PLUMB_CHECK(s.icp_voxel_size > 0.0 && s.plane_query_voxel > 0.0 && s.ground_query_voxel > 0.0,
               "HybridLio: settings.icp_voxel_size / plane_query_voxel / ground_query_voxel must be > 0");
@@ -146,6 +205,8 @@ HybridLio::HybridLio(const Eigen::Isometry3d& T_world_base0, const HybridLioSett
               "HybridLio: settings.map_rebuild_distance must be >= 0 and map_rebuild_frames >= 1");
   PLUMB_CHECK(s.initial_velocity_sigma > 0.0 && s.initial_gyro_bias_sigma > 0.0 && s.initial_accel_bias_sigma > 0.0,
               "HybridLio: settings.initial_*_sigma must be > 0");
+  PLUMB_CHECK(std::isfinite(s.ground_plane_tolerance) && s.ground_plane_tolerance >= 0.0,
+              "HybridLio: settings.ground_plane_tolerance must be >= 0 [m], got " << s.ground_plane_tolerance);
   PLUMB_CHECK(s.ground_max_slope_deg >= 0.0 && s.ground_max_slope_deg < 90.0,
               "HybridLio: settings.ground_max_slope_deg must be in [0, 90)");
   check_map_settings(s.edge_map, "edge_map");
@@ -358,26 +419,15 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
   res.num_plane_interval = feats.num_plane_interval;
   res.num_edge_interval = feats.num_edge_interval;
 
-  // Ground (LeGO-LOAM): vertically adjacent returns below the horizon joined by a flat segment.
-  std::vector<char> ground(cloud.size(), 0);
-  {
-    const Matrix3d R_wl = pred.R_world_body * T_imu_lidar_.linear();
-    const double slope = std::tan(set.ground_max_slope_deg * kPi / 180.0);
-    for (int r = 0; r + 1 < image.num_rows; ++r) {
-      if (!(image.row_elevation[static_cast<std::size_t>(r)] < 0.0)) continue;
-      for (int c = 0; c < image.num_columns; ++c) {
-        const std::int32_t i0 = image.at(r, c), i1 = image.at(r + 1, c);
-        if (i0 < 0 || i1 < 0) continue;
-        const Vector3d d = R_wl * (cloud.points[static_cast<std::size_t>(i1)] -
-                                   cloud.points[static_cast<std::size_t>(i0)]).cast<double>();
-        if (std::abs(d.z()) <= slope * d.head<2>().norm()) {
-          ground[static_cast<std::size_t>(i0)] = 1;
-          ground[static_cast<std::size_t>(i1)] = 1;
-        }
-      }
-    }
-    for (std::size_t i : feats.plane_indices) res.num_structure_planes += ground[i] ? 0 : 1;
-  }
+  // Ground (LeGO-LOAM's pair test, completed by a plane): the road.
+  GroundSettings gs;
+  gs.max_slope_deg = set.ground_max_slope_deg;
+  gs.plane_tolerance = set.ground_plane_tolerance;
+  const GroundResult ground_result = classify_ground(cloud, image, pred.R_world_body * T_imu_lidar_.linear(), gs);
+  const std::vector<char>& ground = ground_result.ground;
+  res.num_ground = ground_result.num_ground;
+  res.num_ground_added = ground_result.num_from_plane;
+  for (std::size_t i : feats.plane_indices) res.num_structure_planes += ground[i] ? 0 : 1;
   // Edges only off the ground (LeGO-LOAM): on the road, range noise makes "corners" along a ring,
   // and lines fitted to them run along the ring circles, which pulls every frame onto the last.
   auto off_ground = [&](const std::vector<std::size_t>& idx) {
@@ -452,10 +502,15 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
     return (here - at).norm() > set.map_rebuild_distance ||
            num_frames_ - frame >= static_cast<std::size_t>(set.map_rebuild_frames);
   };
+  // Fills corr and scale (one per correspondence); returns the matched query points (an ICP
+  // pair to a distribution is three correspondences).
+  std::vector<double> scale;
   auto associate = [&](LioFrameMode m, const ImuState& x, std::vector<LoamCorrespondence>& corr) {
     corr.clear();
+    scale.clear();
     const Eigen::Isometry3d T_world_lidar = pose_of(x) * T_imu_lidar_;
-    if (m == LioFrameMode::kLoam || set.icp_ground_planes) {
+    const bool loam_in_icp = set.icp_keep_loam || set.icp_ground_planes;
+    if (m == LioFrameMode::kLoam || loam_in_icp) {
       if (!loam_tree_ || stale(loam_built_at_, loam_built_frame_)) {
         PointCloud e, p;
         e.points = edge_map_.points();
@@ -465,8 +520,10 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
         loam_built_frame_ = num_frames_;
       }
     }
+    std::size_t matched = 0;
     if (m == LioFrameMode::kLoam) {
       loam_associate_map(*loam_tree_, feats, T_world_lidar, ls, corr);
+      matched = corr.size();
     } else {
       if (!point_tree_ || stale(point_built_at_, point_built_frame_)) {
         point_tree_.reset();
@@ -475,14 +532,23 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
         point_built_at_ = here;
         point_built_frame_ = num_frames_;
       }
-      loam_associate_points(point_cloud_, *point_tree_, icp_points, T_world_lidar, set.max_correspondence_distance,
-                            corr);
+      if (set.icp_metric == IcpMetric::kPointToDistribution) {
+        matched = associate_distributions(point_cloud_, *point_tree_, icp_points, T_world_lidar, set, corr, scale);
+      } else {
+        loam_associate_points(point_cloud_, *point_tree_, icp_points, T_world_lidar, set.max_correspondence_distance,
+                              corr);
+        matched = corr.size();
+      }
       // Too few ICP pairs is what makes the frame fall back to the prediction; ground planes alone
       // do not count (they fix neither x, y nor yaw).
-      if (set.icp_ground_planes && corr.size() >= set.min_correspondences) {
-        loam_associate_map(*loam_tree_, ground_feats, T_world_lidar, ls, corr);
+      if (loam_in_icp && matched >= set.min_correspondences) {
+        const std::size_t before = corr.size();
+        loam_associate_map(*loam_tree_, set.icp_keep_loam ? feats : ground_feats, T_world_lidar, ls, corr);
+        matched += corr.size() - before;
       }
     }
+    scale.resize(corr.size(), 1.0);
+    return matched;
   };
 
   // 4. Joint problem over x_i (offset 0) and x_j (offset 15) with the IMU factor, or over the
@@ -517,7 +583,7 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
     }
     Matrix6d Hl = Matrix6d::Zero();
     Vector6d gl = Vector6d::Zero();
-    cost += lidar_terms(corr, s_imu, b, set, H != nullptr ? &Hl : nullptr, &gl, sum_sq);
+    cost += lidar_terms(corr, scale, s_imu, b, set, H != nullptr ? &Hl : nullptr, &gl, sum_sq);
     if (H != nullptr) {
       H->block<6, 6>(oj, oj) += Hl;
       g->segment<6>(oj) += gl;
@@ -537,6 +603,7 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
   };
 
   bool lidar_ok = true;
+  std::size_t num_matched = 0;
   bool tried_icp = lidar_mode == LioFrameMode::kIcp;
   bool converged = false;
   double lambda = 1e-4;
@@ -545,7 +612,7 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
   double sum_sq = 0.0;
   for (int it = 0; it < set.max_iterations; ++it) {
     if (lidar_ok) {
-      associate(lidar_mode, xj, corr);
+      std::size_t matched = associate(lidar_mode, xj, corr);
       if (it == 0 && set.mode == LioMode::kHybrid && set.switch_on_plane_matches) {
         // The switch on what LOAM would use: plane residuals whose map plane is not flat (walls,
         // roofs, not the road), the ones that fix x, y and yaw.
@@ -556,28 +623,30 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
         if (res.num_structure_matches < set.min_plane_points) {
           tried_icp = true;
           lidar_mode = LioFrameMode::kIcp;
-          associate(lidar_mode, xj, corr);
+          matched = associate(lidar_mode, xj, corr);
         }
       }
-      if (corr.size() < set.min_correspondences) {
+      if (matched < set.min_correspondences) {
         if (set.mode == LioMode::kHybrid && !tried_icp) {  // hybrid: LOAM found too little, try ICP
           tried_icp = true;
           lidar_mode = LioFrameMode::kIcp;
-          associate(lidar_mode, xj, corr);
+          matched = associate(lidar_mode, xj, corr);
         }
-        if (corr.size() < set.min_correspondences) {
+        if (matched < set.min_correspondences) {
           lidar_ok = false;
           corr.clear();
+          matched = 0;
           if (!with_imu) break;
         }
       }
+      num_matched = matched;
       s_imu.resize(corr.size());
       for (std::size_t k = 0; k < corr.size(); ++k) s_imu[k] = T_imu_lidar_ * corr[k].p;
     }
     res.iterations = it + 1;
     const double cost = build(xi, xj, &H, &g, &sum_sq);
-    res.num_correspondences = corr.size();
-    res.rmse = corr.empty() ? 0.0 : std::sqrt(sum_sq / static_cast<double>(corr.size()));
+    res.num_correspondences = num_matched;
+    res.rmse = num_matched == 0 ? 0.0 : std::sqrt(sum_sq / static_cast<double>(num_matched));
     bool accepted = false;
     Vector30d delta = Vector30d::Zero();
     for (int attempt = 0; attempt < 10 && !accepted; ++attempt) {

@@ -7,7 +7,13 @@
 ///        (R, p, v, b_g, b_a) of the previous and the current frame with the IMU factor (E_B), a
 ///        prior on the previous state (the marginal of the last solve), and either LOAM residuals
 ///        against a local feature map (E_L1, when the frame has enough plane points off the ground)
-///        or point-to-point ICP residuals against a local point map (E_L2).
+///        or ICP residuals against a local point map (E_L2).
+///
+/// Two departures from the seed's ICP frames, both settings (the seed's form: icp_metric =
+/// kPointToPoint, icp_keep_loam = false): the pairs are point-to-distribution, and the frame keeps
+/// the LOAM residuals the map still gives (the road, a few walls) beside them. On the simulated
+/// site runs without loop closure the seed's form drifted several times more than LOAM+IMU, these
+/// defaults less (figures in bench/README.md, "Session 10").
 ///
 /// Frames: `T_world_base` is what the caller gets; the estimator's state is the IMU frame
 /// (`T_world_imu = T_world_base * T_base_imu`). The world is z-up with gravity (0, 0, -gravity):
@@ -26,6 +32,7 @@
 #include "plumb/imu/imu.hpp"
 #include "plumb/imu/preintegration.hpp"
 #include "plumb/loam/features.hpp"
+#include "plumb/loam/ground.hpp"
 #include "plumb/loam/local_map.hpp"
 #include "plumb/loam/odometry.hpp"
 #include "plumb/loam/range_image.hpp"
@@ -36,7 +43,7 @@ namespace plumb {
 enum class LioMode {
   kLoam,     ///< LiDAR only: LOAM residuals, constant-velocity prediction, no deskew (LeGO-LOAM without IMU)
   kLoamImu,  ///< IMU factor + LOAM residuals on every frame (E_B + E_L1), IMU deskew and prediction
-  kHybrid,   ///< as kLoamImu, but frames with too few plane points use ICP residuals (E_B + E_L2)
+  kHybrid,   ///< as kLoamImu, but frames with too few plane points add ICP residuals (E_B + E_L1 + E_L2)
 };
 
 /// @brief "loam", "loam-imu", "hybrid". @throws plumb::Error for another name.
@@ -55,6 +62,22 @@ enum class LioFrameMode {
 
 /// @brief "init", "loam", "icp", "prediction", "skipped".
 const char* to_string(LioFrameMode mode);
+
+/// @brief How the ICP frames of the hybrid mode pair a query point with the local point map.
+enum class IcpMetric {
+  /// Nearest map point, isotropic point_sigma (SEEDS eq. 20).
+  kPointToPoint,
+  /// The mean of the icp_neighbors nearest map points, weighted by the inverse of their covariance
+  /// plus point_sigma^2 (a Mahalanobis distance, as in GICP / NDT): where the map is a ring line on
+  /// a far wall, the pair constrains the two directions across the line and hardly the one along
+  /// it, which a nearest point would pin to where the prediction put it.
+  kPointToDistribution,
+};
+
+/// @brief "point-to-point", "point-to-distribution".
+const char* to_string(IcpMetric metric);
+/// @brief Inverse of to_string(IcpMetric). @throws plumb::Error for another name.
+IcpMetric icp_metric_from_string(const std::string& name);
 
 /// @brief Settings of HybridLio. Defaults suit a 16-line LiDAR at 10 Hz and a MEMS IMU.
 struct HybridLioSettings {
@@ -77,6 +100,11 @@ struct HybridLioSettings {
   /// Two vertically adjacent returns below the horizon whose joining segment is flatter than this
   /// are ground (LeGO-LOAM's ground test) [deg].
   double ground_max_slope_deg = 10.0;
+  /// Returns below the sensor this close to the plane through the pair test's ground are ground
+  /// too [m]; 0 = the pair test only (see classify_ground()). Road returns the pair test misses
+  /// stayed among the structure (ICP queries, edges) and, as ring arcs that barely move with the
+  /// sensor, held frames back (simulated site runs: bench/README.md, "Session 10").
+  double ground_plane_tolerance = 0.15;
 
   // --- solver (SEEDS B eq. 21-22)
   int max_iterations = 8;                    ///< association + LM step rounds per frame, >= 1
@@ -110,6 +138,11 @@ struct HybridLioSettings {
   bool dense_plane_queries = true;
   double plane_query_voxel = 0.3;   ///< see dense_plane_queries [m]
   double ground_query_voxel = 0.3;  ///< see dense_plane_queries; also the ICP frames' ground queries [m]
+  IcpMetric icp_metric = IcpMetric::kPointToDistribution;  ///< ICP frames' residual (see IcpMetric)
+  int icp_neighbors = 8;  ///< map points per kPointToDistribution pair, in [3, 64]
+  /// ICP frames keep the LOAM residuals that the map gave too (E_B + E_L1 + E_L2); false: ICP
+  /// residuals only (E_B + E_L2, SEEDS B3.2).
+  bool icp_keep_loam = true;
   /// ICP frames also match their ground returns point-to-plane against the plane map (the ICP
   /// pairs come from off the ground only, so without this height, roll and pitch rest on the IMU).
   bool icp_ground_planes = false;
@@ -147,6 +180,8 @@ struct LioFrameResult {
   bool deskewed_with_imu = false;  ///< ... with the IMU
   std::size_t num_points = 0;            ///< points in the frame
   std::size_t num_plane_points = 0;      ///< plane features selected (all)
+  std::size_t num_ground = 0;            ///< returns taken as ground (the road)
+  std::size_t num_ground_added = 0;      ///< ... of which the ground plane found, not the pair test
   std::size_t num_structure_planes = 0;  ///< plane features off the ground (the switch's count when
                                          ///< settings.switch_on_plane_matches is false)
   std::size_t num_structure_matches = 0; ///< hybrid: non-flat plane residuals at the first association
@@ -154,9 +189,9 @@ struct LioFrameResult {
   std::size_t num_edge_points = 0;       ///< edge features selected
   std::size_t num_plane_interval = 0;    ///< points in the plane cos interval (SEEDS B1.2)
   std::size_t num_edge_interval = 0;     ///< points in the edge cos interval
-  std::size_t num_correspondences = 0;   ///< LiDAR residuals at the last iteration
+  std::size_t num_correspondences = 0;   ///< matched query points (LiDAR pairs) at the last iteration
   int iterations = 0;                    ///< solver rounds
-  double rmse = 0.0;                     ///< RMS LiDAR residual at the last iteration [m]
+  double rmse = 0.0;                     ///< RMS distance of a pair at the last iteration [m]
   double seconds = 0.0;                  ///< wall time of process() [s]
 };
 
