@@ -6,10 +6,12 @@
 // No peer library implements LOAM features, so no peer runs here.
 // lio_frame/plumb/site16: one frame of the LiDAR/IMU hybrid odometry (deskew, features, joint
 // IMU + LiDAR solve, local map update) on a simulated 16-line site run around FZK-Haus
-// (vlp16 + 300 Hz IMU, simulated once before timing), frames processed in order.
+// (vlp16 + 300 Hz IMU, simulated once before timing), frames processed in order;
+// lio_frame_icp the same frames all sent to the hybrid's ICP residuals.
 #include <benchmark/benchmark.h>
 
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -127,10 +129,13 @@ const SiteRun& site16() {
   return *run;
 }
 
-void BM_LioFrame(benchmark::State& state, LioMode mode) {
+// every_frame_icp: the hybrid switch sends every frame to ICP (a plane threshold no frame reaches),
+// so the ICP frames' cost (point-to-distribution pairs and the LOAM residuals beside them) is timed.
+void BM_LioFrame(benchmark::State& state, LioMode mode, bool every_frame_icp) {
   const SiteRun& run = site16();
   HybridLioSettings s = run.settings;
   s.mode = mode;
+  if (every_frame_icp) s.min_plane_points = std::numeric_limits<std::size_t>::max();
   std::unique_ptr<HybridLio> lio;
   std::size_t next = 0, frames = 0;
   auto restart = [&] {
@@ -155,8 +160,13 @@ void BM_LioFrame(benchmark::State& state, LioMode mode) {
   state.counters["points_per_frame"] = static_cast<double>(run.frames.back().size());
 }
 
-BENCHMARK_CAPTURE(BM_LioFrame, site16, LioMode::kHybrid)->Name("lio_frame/plumb/site16")->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_LioFrame, site16_loam, LioMode::kLoam)->Name("lio_frame_loam_only/plumb/site16")->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_LioFrame, site16, LioMode::kHybrid, false)->Name("lio_frame/plumb/site16")->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_LioFrame, site16_icp, LioMode::kHybrid, true)
+    ->Name("lio_frame_icp/plumb/site16")
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_LioFrame, site16_loam, LioMode::kLoam, false)
+    ->Name("lio_frame_loam_only/plumb/site16")
+    ->Unit(benchmark::kMillisecond);
 
 BENCHMARK_CAPTURE(BM_LoamFeatures, hdl32, false)->Name("loam_features/plumb/hdl32")->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_LoamFeatures, hdl32_16ring, true)->Name("loam_features/plumb/hdl32_16ring")->Unit(benchmark::kMillisecond);

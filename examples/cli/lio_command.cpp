@@ -35,6 +35,8 @@ struct LioOptions {
   std::size_t min_plane_points = 48;
   bool no_deskew = false;
   int map_window = 0;
+  std::string icp_metric = to_string(HybridLioSettings{}.icp_metric);
+  bool icp_only = false;
 };
 
 void run(const LioOptions& o) {
@@ -50,6 +52,8 @@ void run(const LioOptions& o) {
   s.T_base_imu = dump.meta().T_base_imu;
   s.min_plane_points = o.min_plane_points;
   s.deskew = !o.no_deskew;
+  s.icp_metric = icp_metric_from_string(o.icp_metric);
+  if (o.icp_only) s.icp_keep_loam = false;
   s.edge_map.max_age = s.plane_map.max_age = s.point_map.max_age = static_cast<std::size_t>(o.map_window);
   for (double e : dump.meta().lidar.elevations_rad) s.image.vertical_angles_deg.push_back(e * 180.0 / 3.14159265358979323846);
 
@@ -105,6 +109,8 @@ void run(const LioOptions& o) {
   j["mode"] = to_string(mode);
   j["frames"] = n;
   j["map_window"] = o.map_window;
+  j["icp_metric"] = to_string(s.icp_metric);
+  j["icp_keep_loam"] = s.icp_keep_loam;
   j["frames_per_mode"] = {{"init", count[static_cast<int>(LioFrameMode::kInit)]},
                           {"loam", count[static_cast<int>(LioFrameMode::kLoam)]},
                           {"icp", count[static_cast<int>(LioFrameMode::kIcp)]},
@@ -195,6 +201,14 @@ void register_lio_command(CLI::App& app) {
                   "Local maps keep only what the last N frames filled (no implicit loop closure when the "
                   "route comes back; 0: everything within 60 m)")
       ->check(CLI::Range(0, 1000000000));
+  cmd->add_option("--icp-metric", o->icp_metric,
+                  "Hybrid ICP frames: point-to-point (SEEDS eq. 20) or point-to-distribution (each pair weighted "
+                  "by the covariance of its map neighbours)")
+      ->check(CLI::IsMember({"point-to-point", "point-to-distribution"}))
+      ->capture_default_str();
+  cmd->add_flag("--icp-only", o->icp_only,
+                "Hybrid ICP frames use the ICP residuals alone (SEEDS: E_B + E_L2), not with the LOAM ones the "
+                "map still gives");
   cmd->callback([o]() { run(*o); });
 }
 

@@ -98,6 +98,23 @@ TEST_F(LioCliTest, HybridWritesTrajectoryAndReport) {
   EXPECT_EQ(jw.at("frames").get<std::size_t>(), n);
   EXPECT_LT(jw.at("end_error").get<double>(), 1.0);
   EXPECT_NE(run_cli("lio '" + dir_ + "' --map-window -3 -o '" + out + "'").exit_code, 0);
+
+  // ICP on every frame (a plane threshold no frame reaches), with either metric, with and without
+  // the LOAM residuals: valid runs near the truth, and the report names the ICP formulation.
+  for (const std::string metric : {"point-to-point", "point-to-distribution"}) {
+    for (const bool only : {false, true}) {
+      SCOPED_TRACE(metric + (only ? " --icp-only" : ""));
+      const test::RunResult r = run_cli("lio '" + dir_ + "' --mode hybrid --min-plane-points 100000 --icp-metric " +
+                                        metric + (only ? " --icp-only" : "") + " -o '" + out + "' --json");
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+      const Json ji = Json::parse(r.out);
+      EXPECT_EQ(ji.at("icp_metric").get<std::string>(), metric);
+      EXPECT_EQ(ji.at("icp_keep_loam").get<bool>(), !only);
+      EXPECT_EQ(ji.at("frames_per_mode").at("icp").get<std::size_t>(), n - 1);
+      EXPECT_LT(ji.at("end_error").get<double>(), 1.0);
+    }
+  }
+  EXPECT_NE(run_cli("lio '" + dir_ + "' --icp-metric point-to-line -o '" + out + "'").exit_code, 0);
 }
 
 TEST_F(LioCliTest, LoamNeedsNoImuAndStartsAtIdentityWithoutGroundTruth) {
