@@ -66,6 +66,7 @@
 #include "plumb/calibration/tuple_extraction.hpp"
 
 #include "plumb/loam/features.hpp"
+#include "plumb/loam/ground.hpp"
 #include "plumb/loam/local_map.hpp"
 #include "plumb/loam/odometry.hpp"
 #include "plumb/loam/range_image.hpp"

@@ -420,10 +420,10 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
   res.num_edge_interval = feats.num_edge_interval;
 
   // Ground (LeGO-LOAM's pair test, completed by a plane): the road.
-  GroundSettings gs;
+  RingGroundSettings gs;
   gs.max_slope_deg = set.ground_max_slope_deg;
   gs.plane_tolerance = set.ground_plane_tolerance;
-  const GroundResult ground_result = classify_ground(cloud, image, pred.R_world_body * T_imu_lidar_.linear(), gs);
+  const RingGroundResult ground_result = classify_ground(cloud, image, pred.R_world_body * T_imu_lidar_.linear(), gs);
   const std::vector<char>& ground = ground_result.ground;
   res.num_ground = ground_result.num_ground;
   res.num_ground_added = ground_result.num_from_plane;

@@ -78,7 +78,7 @@ Frame sweep(const Matrix3d& R_level, int drop) {
 struct Counts {
   std::size_t road = 0, road_marked = 0, other_marked = 0, terrace_marked = 0;
 };
-Counts count(const Frame& f, const GroundResult& g) {
+Counts count(const Frame& f, const RingGroundResult& g) {
   Counts c;
   for (std::size_t i = 0; i < f.surface.size(); ++i) {
     c.road += f.surface[i] == kRoad ? 1 : 0;
@@ -104,9 +104,9 @@ TEST(GroundTest, PlaneTakesTheRoadReturnsThePairTestMisses) {
     const RangeImage image = image_of(f.cloud);
     ASSERT_EQ(image.num_collisions, 0u);
 
-    GroundSettings pair_only;
+    RingGroundSettings pair_only;
     pair_only.plane_tolerance = 0.0;
-    const GroundResult p = classify_ground(f.cloud, image, R_level, pair_only);
+    const RingGroundResult p = classify_ground(f.cloud, image, R_level, pair_only);
     const Counts cp = count(f, p);
     EXPECT_FALSE(p.plane_used);
     EXPECT_EQ(p.num_from_plane, 0u);
@@ -118,7 +118,7 @@ TEST(GroundTest, PlaneTakesTheRoadReturnsThePairTestMisses) {
     // returns to low returns on the wall behind them).
     EXPECT_GT(cp.terrace_marked, 0u);
 
-    const GroundResult g = classify_ground(f.cloud, image, R_level, GroundSettings{});
+    const RingGroundResult g = classify_ground(f.cloud, image, R_level, RingGroundSettings{});
     const Counts cg = count(f, g);
     ASSERT_TRUE(g.plane_used);
     // The plane is the road, z = -0.9 in the level frame: the refits drop the terrace and the wall
@@ -151,11 +151,11 @@ TEST(GroundTest, NoRoadNoPlaneAndBadInput) {
   // Without lost returns the pair test already has the whole road; the plane adds only the feet
   // of the wall and the terrace (returns within its tolerance of the road).
   const Frame full = sweep(Matrix3d::Identity(), 0);
-  GroundSettings pair_only;
+  RingGroundSettings pair_only;
   pair_only.plane_tolerance = 0.0;
-  const GroundResult p = classify_ground(full.cloud, image_of(full.cloud), Matrix3d::Identity(), pair_only);
+  const RingGroundResult p = classify_ground(full.cloud, image_of(full.cloud), Matrix3d::Identity(), pair_only);
   EXPECT_EQ(count(full, p).road_marked, count(full, p).road);
-  const GroundResult g = classify_ground(full.cloud, image_of(full.cloud), Matrix3d::Identity());
+  const RingGroundResult g = classify_ground(full.cloud, image_of(full.cloud), Matrix3d::Identity());
   for (std::size_t i = 0; i < full.surface.size(); ++i) {
     if (g.ground[i] && !p.ground[i]) {
       EXPECT_NE(full.surface[i], kRoad) << "point " << i;
@@ -165,9 +165,9 @@ TEST(GroundTest, NoRoadNoPlaneAndBadInput) {
 
   // Fewer pair-test returns than the plane needs: the pair test only, no throw.
   const Frame lossy = sweep(Matrix3d::Identity(), 5);
-  GroundSettings need_many;
+  RingGroundSettings need_many;
   need_many.min_plane_points = lossy.cloud.size() + 1;
-  const GroundResult gf = classify_ground(lossy.cloud, image_of(lossy.cloud), Matrix3d::Identity(), need_many);
+  const RingGroundResult gf = classify_ground(lossy.cloud, image_of(lossy.cloud), Matrix3d::Identity(), need_many);
   EXPECT_FALSE(gf.plane_used);
   EXPECT_EQ(gf.num_from_plane, 0u);
   EXPECT_LT(count(lossy, gf).road_marked, count(lossy, gf).road);
@@ -177,12 +177,12 @@ TEST(GroundTest, NoRoadNoPlaneAndBadInput) {
   EXPECT_EQ(classify_ground(empty, image_of(empty), Matrix3d::Identity()).num_ground, 0u);
   PointCloud with_nan = full.cloud;
   with_nan.points[10] = Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
-  const GroundResult gn = classify_ground(with_nan, image_of(with_nan), Matrix3d::Identity());
+  const RingGroundResult gn = classify_ground(with_nan, image_of(with_nan), Matrix3d::Identity());
   EXPECT_EQ(gn.ground[10], 0);
 
   // Misuse: an image of another cloud, settings out of range, a non-finite rotation.
   EXPECT_THROW(classify_ground(lossy.cloud, image_of(full.cloud), Matrix3d::Identity()), Error);
-  GroundSettings bad;
+  RingGroundSettings bad;
   bad.max_slope_deg = 90.0;
   EXPECT_THROW(classify_ground(full.cloud, image_of(full.cloud), Matrix3d::Identity(), bad), Error);
   bad = {};

@@ -22,7 +22,7 @@
 namespace plumb {
 
 /// @brief Settings of classify_ground().
-struct GroundSettings {
+struct RingGroundSettings {
   /// Two vertically adjacent returns below the horizon whose joining segment is flatter than this
   /// are ground (LeGO-LOAM's test) [deg], in [0, 90).
   double max_slope_deg = 10.0;
@@ -34,7 +34,7 @@ struct GroundSettings {
 };
 
 /// @brief What classify_ground() found.
-struct GroundResult {
+struct RingGroundResult {
   std::vector<char> ground;         ///< per point of the cloud: 1 = ground
   std::size_t num_ground = 0;       ///< points marked
   std::size_t num_from_plane = 0;   ///< ... of which by the plane, not the pair test
@@ -46,15 +46,15 @@ struct GroundResult {
 /// @param cloud the frame in the LiDAR frame (origin at the optical centre)
 /// @param image its range image (build_range_image() of the same cloud)
 /// @param R_level rotation of the LiDAR frame into a z-up frame (the sensor's roll and pitch; any yaw)
-/// @param settings see GroundSettings
+/// @param settings see RingGroundSettings
 /// @return per-point flags and counts. The plane is z = a x + b y + c fitted by least squares to
 ///         the pair test's returns, refitted twice on those within plane_tolerance of the last fit
 ///         (the pair test also joins a road return to a low return on a wall or step above it); it
 ///         is not used when steeper than max_slope_deg or not below the sensor.
 /// @throws plumb::Error when the image does not belong to the cloud or the settings are out of range
 /// @note O(n); deterministic; no shared state.
-inline GroundResult classify_ground(const PointCloud& cloud, const RangeImage& image, const Eigen::Matrix3d& R_level,
-                                    const GroundSettings& settings = {});
+inline RingGroundResult classify_ground(const PointCloud& cloud, const RangeImage& image,
+                                        const Eigen::Matrix3d& R_level, const RingGroundSettings& settings = {});
 
 }  // namespace plumb
 

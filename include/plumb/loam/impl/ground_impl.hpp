@@ -12,8 +12,8 @@
 
 namespace plumb {
 
-inline GroundResult classify_ground(const PointCloud& cloud, const RangeImage& image, const Eigen::Matrix3d& R_level,
-                                    const GroundSettings& settings) {
+inline RingGroundResult classify_ground(const PointCloud& cloud, const RangeImage& image,
+                                        const Eigen::Matrix3d& R_level, const RingGroundSettings& settings) {
   PLUMB_CHECK(settings.max_slope_deg >= 0.0 && settings.max_slope_deg < 90.0,
               "classify_ground: max_slope_deg must be in [0, 90), got " << settings.max_slope_deg);
   PLUMB_CHECK(std::isfinite(settings.plane_tolerance) && settings.plane_tolerance >= 0.0,
@@ -23,7 +23,7 @@ inline GroundResult classify_ground(const PointCloud& cloud, const RangeImage& i
                   image.index.size() == static_cast<std::size_t>(image.num_rows) * static_cast<std::size_t>(image.num_columns),
               "classify_ground: the range image was not built from this cloud (" << image.point_row.size()
                                                                                 << " points vs " << cloud.size() << ")");
-  GroundResult out;
+  RingGroundResult out;
   out.ground.assign(cloud.size(), 0);
   const double slope = std::tan(settings.max_slope_deg * 3.14159265358979323846 / 180.0);
 
