@@ -120,7 +120,9 @@ struct HybridLioSettings {
   double map_plane_ratio = 10.0;             ///< a fitted plane needs second / smallest eigenvalue >= this
   double plane_sigma = 0.05;                 ///< std of a point-to-plane residual [m]
   double edge_sigma = 0.1;                   ///< std of a point-to-line residual [m]
-  double point_sigma = 0.15;                 ///< std of a point-to-point (ICP) residual [m]
+  /// std of a point-to-point (ICP) residual [m]; kPointToDistribution adds its square to the
+  /// covariance of the map neighbours.
+  double point_sigma = 0.15;
   double huber_scale = 3.0;                  ///< Huber kernel on whitened LiDAR residuals [sigmas]
   /// Fewer LiDAR residuals than this: the LiDAR is not used for the frame (hybrid first tries ICP).
   std::size_t min_correspondences = 30;
