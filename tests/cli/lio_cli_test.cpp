@@ -104,10 +104,10 @@ TEST_F(LioCliTest, HybridWritesTrajectoryAndReport) {
   for (const std::string metric : {"point-to-point", "point-to-distribution"}) {
     for (const bool only : {false, true}) {
       SCOPED_TRACE(metric + (only ? " --icp-only" : ""));
-      const test::RunResult r = run_cli("lio '" + dir_ + "' --mode hybrid --min-plane-points 100000 --icp-metric " +
-                                        metric + (only ? " --icp-only" : "") + " -o '" + out + "' --json");
-      ASSERT_EQ(r.exit_code, 0) << r.err;
-      const Json ji = Json::parse(r.out);
+      const test::RunResult ri = run_cli("lio '" + dir_ + "' --mode hybrid --min-plane-points 100000 --icp-metric " +
+                                         metric + (only ? " --icp-only" : "") + " -o '" + out + "' --json");
+      ASSERT_EQ(ri.exit_code, 0) << ri.err;
+      const Json ji = Json::parse(ri.out);
       EXPECT_EQ(ji.at("icp_metric").get<std::string>(), metric);
       EXPECT_EQ(ji.at("icp_keep_loam").get<bool>(), !only);
       EXPECT_EQ(ji.at("frames_per_mode").at("icp").get<std::size_t>(), n - 1);
