@@ -43,11 +43,10 @@ double huber_weight(double s, double k) { return s <= k * k ? 1.0 : k / std::sqr
 
 /// The LiDAR residuals of SEEDS eq. 6, 7, 20 as functions of the IMU state j: a query point s in
 /// the IMU frame maps to q = R s + p; Jacobians w.r.t. [dphi, dp] (right perturbation of R, p + dp).
-/// scale[k] multiplies correspondence k's whitened residual (1: its kind's sigma). Returns 1/2 sum
+/// A correspondence's weight multiplies its whitened residual (1: its kind's sigma). Returns 1/2 sum
 /// rho; adds the IRLS-weighted normal equations, and to sum_sq the squared residuals [m^2], when H
 /// is not null.
-double lidar_terms(const std::vector<LoamCorrespondence>& corr, const std::vector<double>& scale,
-                   const std::vector<Vector3d>& s_imu, const ImuState& x, const HybridLioSettings& set, Matrix6d* H,
+double lidar_terms(const std::vector<LoamCorrespondence>& corr, const std::vector<Vector3d>& s_imu, const ImuState& x, const HybridLioSettings& set, Matrix6d* H,
                    Vector6d* g, double* sum_sq) {
   const Matrix3d& R = x.R_world_body;
   const Vector3d& p = x.p_world_body;
@@ -61,7 +60,7 @@ double lidar_terms(const std::vector<LoamCorrespondence>& corr, const std::vecto
       Jq.rightCols<3>().setIdentity();
     }
     if (c.kind == LoamCorrespondence::Kind::kPlane) {
-      const double inv = scale[k] / set.plane_sigma;
+      const double inv = c.weight / set.plane_sigma;
       const double d = c.dir.dot(q - c.a);
       const double r = inv * d;
       const double s = r * r;
@@ -75,7 +74,7 @@ double lidar_terms(const std::vector<LoamCorrespondence>& corr, const std::vecto
       }
     } else {
       const bool edge = c.kind == LoamCorrespondence::Kind::kEdge;
-      const double inv = scale[k] / (edge ? set.edge_sigma : set.point_sigma);
+      const double inv = c.weight / (edge ? set.edge_sigma : set.point_sigma);
       const Vector3d d = edge ? Vector3d(c.dir.cross(q - c.a)) : Vector3d(q - c.a);
       const Vector3d r = inv * d;
       const double s = r.squaredNorm();
@@ -95,11 +94,11 @@ double lidar_terms(const std::vector<LoamCorrespondence>& corr, const std::vecto
 /// IcpMetric::kPointToDistribution pairs: each point of `cur`, moved by T_map_cur, against the mean
 /// and covariance of its icp_neighbors nearest map points within max_correspondence_distance (at
 /// least 3 of them). A pair becomes three kPlane correspondences, one along each covariance axis,
-/// whose scale turns the plane residual's 1 / plane_sigma into 1 / sqrt(lambda + point_sigma^2):
-/// together the Mahalanobis distance of the point. Appends to corr / scale; returns the pairs.
+/// whose weight turns the plane residual's 1 / plane_sigma into 1 / sqrt(lambda + point_sigma^2):
+/// together the Mahalanobis distance of the point. Appends to corr; returns the pairs.
 std::size_t associate_distributions(const PointCloud& map, const KdTree3f& tree, const PointCloud& cur,
                                     const Eigen::Isometry3d& T_map_cur, const HybridLioSettings& set,
-                                    std::vector<LoamCorrespondence>& corr, std::vector<double>& scale) {
+                                    std::vector<LoamCorrespondence>& corr) {
   const std::size_t k = static_cast<std::size_t>(set.icp_neighbors);
   std::size_t idx[64];
   float d2[64];
@@ -112,21 +111,15 @@ std::size_t associate_distributions(const PointCloud& map, const KdTree3f& tree,
     if (!p.allFinite()) continue;
     const std::size_t m = tree.knn(R * p + t, k, idx, d2, max_sq);
     if (m < 3) continue;
-    Vector3d mean = Vector3d::Zero();
-    for (std::size_t i = 0; i < m; ++i) mean += map.points[idx[i]].cast<double>();
-    mean /= static_cast<double>(m);
-    Matrix3d cov = Matrix3d::Zero();
-    for (std::size_t i = 0; i < m; ++i) {
-      const Vector3d d = map.points[idx[i]].cast<double>() - mean;
-      cov.noalias() += d * d.transpose();
-    }
-    cov /= static_cast<double>(m);
+    Vector3d mean;
+    Matrix3d cov;
+    loam_neighbour_moments(map, idx, m, mean, cov);
     Eigen::SelfAdjointEigenSolver<Matrix3d> eig;
     eig.computeDirect(cov);
     for (int a = 0; a < 3; ++a) {
       const double lambda = std::max(eig.eigenvalues()(a), 0.0);
-      corr.push_back({LoamCorrespondence::Kind::kPlane, p.cast<double>(), mean, eig.eigenvectors().col(a)});
-      scale.push_back(set.plane_sigma / std::sqrt(lambda + var0));
+      corr.push_back({LoamCorrespondence::Kind::kPlane, p.cast<double>(), mean, eig.eigenvectors().col(a),
+                      set.plane_sigma / std::sqrt(lambda + var0)});
     }
     ++pairs;
   }
@@ -502,12 +495,10 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
     return (here - at).norm() > set.map_rebuild_distance ||
            num_frames_ - frame >= static_cast<std::size_t>(set.map_rebuild_frames);
   };
-  // Fills corr and scale (one per correspondence); returns the matched query points (an ICP
-  // pair to a distribution is three correspondences).
-  std::vector<double> scale;
+  // Fills corr; returns the matched query points (an ICP pair to a distribution is three
+  // correspondences).
   auto associate = [&](LioFrameMode m, const ImuState& x, std::vector<LoamCorrespondence>& corr) {
     corr.clear();
-    scale.clear();
     const Eigen::Isometry3d T_world_lidar = pose_of(x) * T_imu_lidar_;
     const bool loam_in_icp = set.icp_keep_loam || set.icp_ground_planes;
     if (m == LioFrameMode::kLoam || loam_in_icp) {
@@ -533,7 +524,7 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
         point_built_frame_ = num_frames_;
       }
       if (set.icp_metric == IcpMetric::kPointToDistribution) {
-        matched = associate_distributions(point_cloud_, *point_tree_, icp_points, T_world_lidar, set, corr, scale);
+        matched = associate_distributions(point_cloud_, *point_tree_, icp_points, T_world_lidar, set, corr);
       } else {
         loam_associate_points(point_cloud_, *point_tree_, icp_points, T_world_lidar, set.max_correspondence_distance,
                               corr);
@@ -547,7 +538,6 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
         matched += corr.size() - before;
       }
     }
-    scale.resize(corr.size(), 1.0);
     return matched;
   };
 
@@ -583,7 +573,7 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
     }
     Matrix6d Hl = Matrix6d::Zero();
     Vector6d gl = Vector6d::Zero();
-    cost += lidar_terms(corr, scale, s_imu, b, set, H != nullptr ? &Hl : nullptr, &gl, sum_sq);
+    cost += lidar_terms(corr, s_imu, b, set, H != nullptr ? &Hl : nullptr, &gl, sum_sq);
     if (H != nullptr) {
       H->block<6, 6>(oj, oj) += Hl;
       g->segment<6>(oj) += gl;

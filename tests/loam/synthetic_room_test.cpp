@@ -9,6 +9,7 @@
 #include <optional>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 
 #include "plumb/core/error.hpp"
@@ -433,6 +434,67 @@ TEST(LoamOdometryTest, DegenerateInputGivesStatusNotCrash) {
   EXPECT_THROW(loam_scan_to_scan(fa, fa, guess, s), Error);
   const LoamMap empty_map(PointCloud{}, PointCloud{});
   EXPECT_EQ(loam_scan_to_map(empty_map, fa, guess).status, Status::kInsufficientData);
+}
+
+
+TEST(LoamOdometryTest, NeighbourMomentsMatchADirectComputation) {
+  // Points on a tilted line far from the origin plus a small offset: the two-pass moments must
+  // match sums in long double, and a line's covariance has one non-zero eigenvalue.
+  PointCloud cloud;
+  const Vector3d origin(120.0, -80.0, 3.0), dir = Vector3d(1.0, 2.0, 0.5).normalized();
+  for (int i = 0; i < 9; ++i) cloud.points.push_back((origin + (0.1 * i) * dir).cast<float>());
+  cloud.points.push_back(Vector3f(0.0f, 0.0f, 0.0f));  // not selected
+  const std::size_t idx[] = {8, 0, 3, 5, 1, 7, 2, 6, 4};
+  Vector3d mean;
+  Matrix3d cov;
+  loam_neighbour_moments(cloud, idx, 9, mean, cov);
+  long double m[3] = {0, 0, 0};
+  for (std::size_t i : idx) {
+    for (int a = 0; a < 3; ++a) m[a] += static_cast<long double>(cloud.points[i](a)) / 9.0L;
+  }
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(mean(a), static_cast<double>(m[a]), 1e-12);
+    for (int b = 0; b < 3; ++b) {
+      long double c = 0;
+      for (std::size_t i : idx) {
+        c += (cloud.points[i](a) - m[a]) * (cloud.points[i](b) - m[b]) / 9.0L;
+      }
+      EXPECT_NEAR(cov(a, b), static_cast<double>(c), 1e-12);
+    }
+  }
+  const Eigen::SelfAdjointEigenSolver<Matrix3d> eig(cov);
+  EXPECT_LT(eig.eigenvalues()(1), 1e-9);
+  EXPECT_NEAR(eig.eigenvalues()(2), 0.0666667, 1e-4);  // var of 0, 0.1, ..., 0.8 = 0.4 * 1/6
+  EXPECT_NEAR(std::abs(eig.eigenvectors().col(2).dot(dir)), 1.0, 1e-6);
+  // One point: its own mean, zero covariance.
+  loam_neighbour_moments(cloud, idx + 4, 1, mean, cov);
+  EXPECT_TRUE(mean.isApprox(cloud.points[1].cast<double>()));
+  EXPECT_EQ(cov, Matrix3d::Zero());
+}
+
+TEST(LoamOdometryTest, CorrespondenceWeightScalesItsResidual) {
+  // Inside the Huber threshold (0: plain least squares) a weight w multiplies the residual, so the
+  // cost, the normal matrix and the gradient all grow by w^2; weight 1 is the unweighted factor.
+  const Eigen::Isometry3d T = pose(0.2, -0.1, 0.05, 5.0, 1.0, -2.0);
+  std::vector<LoamCorrespondence> plain = {
+      {LoamCorrespondence::Kind::kPlane, Vector3d(1.0, 2.0, 0.5), Vector3d(1.3, 1.9, 0.2), Vector3d::UnitZ()},
+      {LoamCorrespondence::Kind::kEdge, Vector3d(-2.0, 1.0, 1.0), Vector3d(-1.8, 0.7, 0.0), Vector3d::UnitX()},
+      {LoamCorrespondence::Kind::kPoint, Vector3d(0.5, -1.0, 2.0), Vector3d(0.8, -1.2, 2.1), Vector3d::Zero()}};
+  for (const LoamCorrespondence& c : plain) EXPECT_EQ(c.weight, 1.0);
+  for (std::size_t k = 0; k < plain.size(); ++k) {
+    std::vector<LoamCorrespondence> one = {plain[k]}, heavy = {plain[k]};
+    heavy[0].weight = 3.0;
+    Matrix6d H1, H3, P1, P3;
+    Vector6d g1, g3;
+    double s1 = 0.0, s3 = 0.0;
+    const double c1 = loam_detail::evaluate(one, T, 0.0, &H1, &g1, &P1, &s1);
+    const double c3 = loam_detail::evaluate(heavy, T, 0.0, &H3, &g3, &P3, &s3);
+    EXPECT_GT(c1, 1e-4) << k;
+    EXPECT_NEAR(c3, 9.0 * c1, 1e-12) << k;
+    EXPECT_NEAR(s3, 9.0 * s1, 1e-12) << k;
+    EXPECT_LT((H3 - 9.0 * H1).norm(), 1e-9 * H1.norm()) << k;
+    EXPECT_LT((g3 - 9.0 * g1).norm(), 1e-9 * g1.norm()) << k;
+  }
 }
 
 }  // namespace

@@ -73,7 +73,27 @@ struct LoamCorrespondence {
   Vector3d p = Vector3d::Zero();    ///< query point, current frame [m]
   Vector3d a = Vector3d::Zero();    ///< anchor on the line / plane, or the matched point, target frame [m]
   Vector3d dir = Vector3d::Zero();  ///< unit line direction (edge) or unit normal (plane)
+  /// Multiplies the residual (so its square weighs weight^2 in the cost); 1 for a plain LOAM
+  /// correspondence. The hybrid's point-to-distribution pairs use it to whiten each axis.
+  double weight = 1.0;
 };
+
+/// @brief Mean and covariance (about the mean, divided by n) of the points `idx[0..n)` of `cloud`,
+///        two passes in double: the neighbourhood model of the map matchers (a line along the
+///        largest axis, a plane across the smallest, a Gaussian for point-to-distribution).
+/// @pre n >= 1 and every index < cloud.size()
+inline void loam_neighbour_moments(const PointCloud& cloud, const std::size_t* idx, std::size_t n, Vector3d& mean,
+                                   Matrix3d& cov) {
+  mean.setZero();
+  for (std::size_t i = 0; i < n; ++i) mean += cloud.points[idx[i]].cast<double>();
+  mean /= static_cast<double>(n);
+  cov.setZero();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vector3d e = cloud.points[idx[i]].cast<double>() - mean;
+    cov += e * e.transpose();
+  }
+  cov /= static_cast<double>(n);
+}
 
 /// @brief A local feature map for scan-to-map matching: edge and plane points in the map frame,
 ///        each with a kd-tree. Non-finite points are ignored.

@@ -62,13 +62,10 @@ inline RingGroundResult classify_ground(const PointCloud& cloud, const RangeImag
         ++n;
       }
       const Eigen::LDLT<Eigen::Matrix3d> ldlt(A);
-      if (n < std::max<std::size_t>(settings.min_plane_points, 3) || ldlt.info() != Eigen::Success) {
-        fitted = false;
-        break;
-      }
       const Eigen::Vector3d abc = ldlt.solve(rhs);
-      if (!abc.allFinite()) fitted = false;
-      else out.plane = abc;
+      fitted = n >= std::max<std::size_t>(settings.min_plane_points, 3) && ldlt.info() == Eigen::Success &&
+               abc.allFinite();
+      if (fitted) out.plane = abc;
     }
     out.plane_used = fitted && out.plane.head<2>().norm() <= slope && out.plane.z() < 0.0;
     if (out.plane_used) {

@@ -49,7 +49,8 @@ inline double evaluate(const std::vector<Factor>& factors, const Eigen::Isometry
   Matrix16d J1;
   for (const Factor& f : factors) {
     if (f.kind == Factor::Kind::kPlane) {
-      const double r = point_to_plane_residual(T, f.p, f.a, f.dir, H != nullptr ? &J1 : nullptr);
+      const double r = f.weight * point_to_plane_residual(T, f.p, f.a, f.dir, H != nullptr ? &J1 : nullptr);
+      if (H != nullptr) J1 *= f.weight;
       const double e = std::abs(r);
       cost += huber_rho(e, huber);
       if (H != nullptr) {
@@ -61,9 +62,10 @@ inline double evaluate(const std::vector<Factor>& factors, const Eigen::Isometry
         *sum_sq += e * e;
       }
     } else {
-      const Vector3d r = f.kind == Factor::Kind::kEdge
-                             ? point_to_edge_residual(T, f.p, f.a, f.dir, H != nullptr ? &J3 : nullptr)
-                             : point_to_point_residual(T, f.p, f.a, H != nullptr ? &J3 : nullptr);
+      const Vector3d r = f.weight * (f.kind == Factor::Kind::kEdge
+                                         ? point_to_edge_residual(T, f.p, f.a, f.dir, H != nullptr ? &J3 : nullptr)
+                                         : point_to_point_residual(T, f.p, f.a, H != nullptr ? &J3 : nullptr));
+      if (H != nullptr) J3 *= f.weight;
       const double e = r.norm();
       cost += huber_rho(e, huber);
       if (H != nullptr) {
@@ -318,15 +320,9 @@ inline void loam_associate_map(const LoamMap& map, const LoamFeatures& cur, cons
                  Eigen::SelfAdjointEigenSolver<Matrix3d>& eig) {
     const std::size_t found = tree.knn(q, kk, idx, d);
     if (found < kk || d[found - 1] > max_sq) return false;
-    mean.setZero();
-    for (std::size_t i = 0; i < found; ++i) mean += cloud.points[idx[i]].cast<double>();
-    mean /= static_cast<double>(found);
-    Matrix3d C = Matrix3d::Zero();
-    for (std::size_t i = 0; i < found; ++i) {
-      const Vector3d e = cloud.points[idx[i]].cast<double>() - mean;
-      C += e * e.transpose();
-    }
-    eig.computeDirect(C / static_cast<double>(found));
+    Matrix3d C;
+    loam_neighbour_moments(cloud, idx, found, mean, C);
+    eig.computeDirect(C);
     return true;
   };
   Vector3d mean;
