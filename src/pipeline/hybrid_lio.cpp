@@ -46,8 +46,8 @@ double huber_weight(double s, double k) { return s <= k * k ? 1.0 : k / std::sqr
 /// A correspondence's weight multiplies its whitened residual (1: its kind's sigma). Returns 1/2 sum
 /// rho; adds the IRLS-weighted normal equations, and to sum_sq the squared residuals [m^2], when H
 /// is not null.
-double lidar_terms(const std::vector<LoamCorrespondence>& corr, const std::vector<Vector3d>& s_imu, const ImuState& x, const HybridLioSettings& set, Matrix6d* H,
-                   Vector6d* g, double* sum_sq) {
+double lidar_terms(const std::vector<LoamCorrespondence>& corr, const std::vector<Vector3d>& s_imu, const ImuState& x,
+                   const HybridLioSettings& set, Matrix6d* H, Vector6d* g, double* sum_sq) {
   const Matrix3d& R = x.R_world_body;
   const Vector3d& p = x.p_world_body;
   double cost = 0.0;
