@@ -95,6 +95,12 @@ void check_settings(const BimLocalizerSettings& s) {
   PLUMB_CHECK(std::isfinite(s.max_see_through) && s.max_see_through >= 0.0 && std::isfinite(s.see_through_margin) &&
                   s.see_through_margin >= 0.0,
               "BimLocalizer: max_see_through and see_through_margin must be >= 0");
+  PLUMB_CHECK(std::isfinite(s.min_score_hinted) && s.min_score_hinted >= 0.0 && s.min_score_hinted <= 1.0 &&
+                  std::isfinite(s.min_overlap_hinted) && s.min_overlap_hinted >= 0.0 && s.min_overlap_hinted <= 1.0,
+              "BimLocalizer: min_score_hinted = " << s.min_score_hinted << " and min_overlap_hinted = "
+                                                  << s.min_overlap_hinted << " must be in [0, 1]");
+  PLUMB_CHECK(std::isfinite(s.search_see_through) && s.search_see_through >= 0.0,
+              "BimLocalizer: search_see_through = " << s.search_see_through << " must be >= 0");
   PLUMB_CHECK(std::isfinite(s.max_refine_shift) && s.max_refine_shift > 0.0,
               "BimLocalizer: max_refine_shift = " << s.max_refine_shift << " must be > 0");
 }
@@ -205,7 +211,9 @@ BimLocalization BimLocalizer::localize(const PointCloud& frame, const Eigen::Iso
 
   CorrelativeSearchSettings ss;
   ss.max_points = settings_.max_points;
-  ss.min_score = settings_.min_score * (1.0 - settings_.ambiguity_margin);  // a second pose below this cannot matter
+  // With a hint, a weaker 2D match may still be confirmed in 3D (see min_score_hinted).
+  const double min_score = hint ? std::min(settings_.min_score, settings_.min_score_hinted) : settings_.min_score;
+  ss.min_score = min_score * (1.0 - settings_.ambiguity_margin);  // a second pose below this cannot matter
   ss.second_distance = settings_.ambiguity_distance;
   ss.second_angle = settings_.ambiguity_angle;
   if (hint) {
@@ -218,8 +226,23 @@ BimLocalization BimLocalizer::localize(const PointCloud& frame, const Eigen::Iso
   Pose2 best_pose, second_pose;
   const StoreyMap* second_map = nullptr;
   bool any_data = false;
+  const Vector2d sensor = T_base_lidar.translation().head<2>();
+  // The search's free-space test runs on up to 200 of the points (evenly spread): it is called on
+  // every pose that would become the best, thousands of times in a building of look-alike rooms.
+  std::vector<Vector2d> probe;
+  const std::size_t num_probe = std::min<std::size_t>(scan.size(), 200);
+  for (std::size_t i = 0; i < num_probe; ++i) probe.push_back(scan[i * scan.size() / num_probe]);
+  bool truncated = false;
   for (const StoreyMap& m : maps_) {
+    ss.accept = nullptr;
+    if (m.solid && settings_.search_see_through > 0.0) {
+      ss.accept = [&](const Pose2& pose) {
+        return m.solid->see_through(probe, pose, sensor, settings_.see_through_margin) <= settings_.search_see_through;
+      };
+    }
     const CorrelativeResult cr = m.map->match(scan, ss, normals);
+    out.rejected_by_free_space += cr.rejected;
+    truncated = truncated || cr.truncated;
     out.num_points = cr.num_points;
     out.nodes_scored += cr.nodes_scored;
     if (cr.status == Status::kInsufficientData) continue;
@@ -283,10 +306,12 @@ BimLocalization BimLocalizer::localize(const PointCloud& frame, const Eigen::Iso
   const Pose2 refined{out.T_bim_base.translation().x(), out.T_bim_base.translation().y(),
                       std::atan2(out.T_bim_base.linear()(1, 0), out.T_bim_base.linear()(0, 0))};
   if (result_map->solid) {
-    out.see_through = result_map->solid->see_through(scan, refined, T_base_lidar.translation().head<2>(),
-                                                     settings_.see_through_margin);
+    out.see_through = result_map->solid->see_through(scan, refined, sensor, settings_.see_through_margin);
   }
-  if (out.score < settings_.min_score || out.ambiguous || shift > settings_.max_refine_shift ||
+  out.truncated = truncated;
+  const bool score_ok = out.score >= settings_.min_score ||
+                        (hint && out.score >= settings_.min_score_hinted && out.fine.overlap >= settings_.min_overlap_hinted);
+  if (!score_ok || out.ambiguous || out.truncated || shift > settings_.max_refine_shift ||
       out.see_through > settings_.max_see_through) {
     out.status = Status::kRejected;
   } else {

@@ -364,16 +364,25 @@ CorrelativeResult CorrelativeMap2D::match(const std::vector<Vector2d>& scan_in, 
     Node best;
     bool found = false;
     long floor_score;
+    std::size_t rejected = 0;
+    bool stopped = false;  ///< max_rejections reached
   };
   std::function<void(const std::vector<Node>&, Search&, const std::function<bool(const Node&, int)>&)> descend;
   descend = [&](const std::vector<Node>& nodes, Search& search, const std::function<bool(const Node&, int)>& excluded) {
     for (const Node& node : nodes) {
-      if (node.score <= search.floor_score) return;  // sorted: nothing after can beat it
+      if (node.score <= search.floor_score || search.stopped) return;  // sorted: nothing after can beat it
       const int size = 1 << node.h;
       if (excluded && excluded(node, size)) continue;
       if (node.h == 0) {
         if (!levels_[0].allowed[index(node.jx, node.jy)]) continue;
         if (s.region_center && (translation(node.jx, node.jy) - *s.region_center).norm() > s.region_radius) continue;
+        if (s.accept) {
+          const Vector2d t = translation(node.jx, node.jy);
+          if (!s.accept(Pose2{t.x(), t.y(), wrap_angle(angles[static_cast<std::size_t>(node.a)])})) {
+            if (++search.rejected == s.max_rejections) search.stopped = true;
+            continue;
+          }
+        }
         search.best = node;
         search.found = true;
         search.floor_score = node.score;
@@ -396,6 +405,8 @@ CorrelativeResult CorrelativeMap2D::match(const std::vector<Vector2d>& scan_in, 
   Search first;
   first.floor_score = threshold - 1;
   descend(roots, first, {});
+  out.rejected = first.rejected;
+  out.truncated = first.stopped;
   if (!first.found) {
     out.status = Status::kRejected;
     out.nodes_scored = scored;
@@ -415,6 +426,8 @@ CorrelativeResult CorrelativeMap2D::match(const std::vector<Vector2d>& scan_in, 
     Search second;
     second.floor_score = threshold - 1;
     descend(roots, second, excluded);
+    out.rejected += second.rejected;
+    out.truncated = out.truncated || second.stopped;
     if (second.found) {
       out.has_second = true;
       out.second_pose = Pose2{translation(second.best.jx, second.best.jy).x(), translation(second.best.jx, second.best.jy).y(),

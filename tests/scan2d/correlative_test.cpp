@@ -103,6 +103,77 @@ TEST(CorrelativeMatchTest, BranchAndBoundEqualsBruteForce) {
   EXPECT_LT(std::abs(plumb::wrap_angle(r.pose.theta - truth.theta)), ss.angular_step);
 }
 
+// A pose the accept test turns down is skipped, the search goes on: the result equals the brute
+// force over the accepted poses only (here: none within 0.6 m of the truth), for the best and the
+// second pose; a test that accepts nothing ends at max_rejections with kRejected.
+TEST(CorrelativeMatchTest, AcceptTestSkipsPosesAndEqualsBruteForceOverTheRest) {
+  std::vector<Vector2d> pts, normals;
+  floor_plan(pts, normals);
+  CorrelativeMapSettings ms;
+  ms.resolution = 0.1;
+  ms.levels = 5;
+  auto inside = [](const Vector2d& t) { return t.x() > 0.2 && t.x() < 7.8 && t.y() > 0.2 && t.y() < 4.8; };
+  const CorrelativeMap2D map(pts, ms, inside);
+  plumb::Rng rng(5);
+  const Pose2 truth{2.33, 1.71, 0.6};
+  const std::vector<Vector2d> scan = scan_from(pts, truth, rng);
+  CorrelativeSearchSettings ss;
+  ss.angular_step = 2.0 * M_PI / 90.0;
+  ss.max_points = 100000;
+  auto far_from_truth = [&](const Pose2& p) { return (Vector2d(p.x, p.y) - Vector2d(truth.x, truth.y)).norm() >= 0.6; };
+  std::size_t calls = 0;
+  ss.accept = [&](const Pose2& p) {
+    ++calls;
+    return far_from_truth(p);
+  };
+  const plumb::CorrelativeResult r = map.match(scan, ss);
+  ASSERT_EQ(r.status, plumb::Status::kOk);
+  EXPECT_GT(r.rejected, 0u);
+  EXPECT_FALSE(r.truncated);
+  EXPECT_GE(calls, r.rejected);
+  EXPECT_TRUE(far_from_truth(r.pose));
+
+  double best = -1.0, second = -1.0;
+  Pose2 best_pose;
+  std::vector<std::pair<double, Pose2>> all;
+  for (int a = 0; a < 90; ++a) {
+    const double theta = -M_PI + 2.0 * M_PI * a / 90.0;
+    for (int jy = 0; jy < map.height(); ++jy) {
+      for (int jx = 0; jx < map.width(); ++jx) {
+        const Vector2d t = map.origin() + Vector2d(jx, jy) * ms.resolution;
+        const Pose2 p{t.x(), t.y(), theta};
+        if (!inside(t) || !far_from_truth(p)) continue;
+        const double s = map.score(scan, p);
+        all.emplace_back(s, p);
+        if (s > best) {
+          best = s;
+          best_pose = p;
+        }
+      }
+    }
+  }
+  for (const auto& [s, p] : all) {
+    const bool near = (Vector2d(p.x, p.y) - Vector2d(best_pose.x, best_pose.y)).norm() < ss.second_distance &&
+                      std::abs(plumb::wrap_angle(p.theta - best_pose.theta)) < ss.second_angle;
+    if (!near) second = std::max(second, s);
+  }
+  EXPECT_NEAR(r.score, best, 1e-9);
+  EXPECT_NEAR(r.second_score, second, 1e-9);
+  // Without the test the truth wins, with a higher score than anything accepted.
+  ss.accept = nullptr;
+  const plumb::CorrelativeResult plain = map.match(scan, ss);
+  EXPECT_GT(plain.score, r.score);
+  EXPECT_LT((Vector2d(plain.pose.x, plain.pose.y) - Vector2d(truth.x, truth.y)).norm(), 0.15);
+
+  // Nothing accepted: the search stops after max_rejections poses.
+  ss.accept = [](const Pose2&) { return false; };
+  ss.max_rejections = 50;
+  const plumb::CorrelativeResult none = map.match(scan, ss);
+  EXPECT_EQ(none.status, plumb::Status::kRejected);
+  EXPECT_TRUE(none.truncated);
+  EXPECT_EQ(none.rejected, 50u);
+}
+
 TEST(CorrelativeMatchTest, NormalsKeepAWallsFarFaceFromExplainingItsNearFace) {
   // A scan of the partition's left face only, seen from the left room: without normals the right
   // face (10 cm away) explains it as well; with normals only the left face does.

@@ -61,6 +61,13 @@ struct CorrelativeSearchSettings {
   /// from the best one; negative distance = no second search.
   double second_distance = 1.0;
   double second_angle = 0.35;          ///< [rad]
+  /// Optional test of a candidate pose, e.g. free space (see_through()). A pose it rejects is
+  /// skipped and the search goes on to the next best, for the best and for the second pose alike.
+  /// Called only on single poses that would beat the best found so far.
+  std::function<bool(const Pose2&)> accept;
+  /// At most this many poses rejected by `accept` per search (best, then second); after that the
+  /// search ends with what it has (a frame that fits nowhere must not test every pose). 0 = no limit.
+  std::size_t max_rejections = 10000;
 };
 
 /// @brief Result of CorrelativeMap2D::match().
@@ -75,6 +82,10 @@ struct CorrelativeResult {
   std::size_t num_points = 0;  ///< scan points used
   std::size_t num_angles = 0;  ///< headings searched
   std::size_t nodes_scored = 0;  ///< branch-and-bound nodes scored (both searches)
+  std::size_t rejected = 0;    ///< poses CorrelativeSearchSettings::accept turned down (both searches)
+  /// A search stopped at CorrelativeSearchSettings::max_rejections: `pose` and `second_pose` are
+  /// the best found until then, not necessarily the best there are.
+  bool truncated = false;
   double seconds = 0.0;
 };
 
