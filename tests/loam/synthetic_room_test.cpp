@@ -436,10 +436,10 @@ TEST(LoamOdometryTest, DegenerateInputGivesStatusNotCrash) {
   EXPECT_EQ(loam_scan_to_map(empty_map, fa, guess).status, Status::kInsufficientData);
 }
 
-
 TEST(LoamOdometryTest, NeighbourMomentsMatchADirectComputation) {
-  // Points on a tilted line far from the origin plus a small offset: the two-pass moments must
-  // match sums in long double, and a line's covariance has one non-zero eigenvalue.
+  // Points on a tilted line far from the origin, listed out of order, and a tenth point at the
+  // origin that is not selected: the two-pass moments must match sums in long double, and a
+  // line's covariance has one non-zero eigenvalue.
   PointCloud cloud;
   const Vector3d origin(120.0, -80.0, 3.0), dir = Vector3d(1.0, 2.0, 0.5).normalized();
   for (int i = 0; i < 9; ++i) cloud.points.push_back((origin + (0.1 * i) * dir).cast<float>());
@@ -470,6 +470,8 @@ TEST(LoamOdometryTest, NeighbourMomentsMatchADirectComputation) {
   loam_neighbour_moments(cloud, idx + 4, 1, mean, cov);
   EXPECT_TRUE(mean.isApprox(cloud.points[1].cast<double>()));
   EXPECT_EQ(cov, Matrix3d::Zero());
+  // No point: a clear error, not a division by zero.
+  EXPECT_THROW(loam_neighbour_moments(cloud, idx, 0, mean, cov), Error);
 }
 
 TEST(LoamOdometryTest, CorrespondenceWeightScalesItsResidual) {

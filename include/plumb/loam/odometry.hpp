@@ -12,6 +12,7 @@
 
 #include <Eigen/Geometry>
 
+#include "plumb/core/error.hpp"
 #include "plumb/core/point_cloud.hpp"
 #include "plumb/core/status.hpp"
 #include "plumb/loam/features.hpp"
@@ -81,9 +82,11 @@ struct LoamCorrespondence {
 /// @brief Mean and covariance (about the mean, divided by n) of the points `idx[0..n)` of `cloud`,
 ///        two passes in double: the neighbourhood model of the map matchers (a line along the
 ///        largest axis, a plane across the smallest, a Gaussian for point-to-distribution).
-/// @pre n >= 1 and every index < cloud.size()
+/// @pre every index < cloud.size()
+/// @throws plumb::Error when n == 0
 inline void loam_neighbour_moments(const PointCloud& cloud, const std::size_t* idx, std::size_t n, Vector3d& mean,
                                    Matrix3d& cov) {
+  PLUMB_CHECK(n > 0, "loam_neighbour_moments: no point");
   mean.setZero();
   for (std::size_t i = 0; i < n; ++i) mean += cloud.points[idx[i]].cast<double>();
   mean /= static_cast<double>(n);
