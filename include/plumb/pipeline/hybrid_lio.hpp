@@ -162,7 +162,8 @@ struct HybridLioSettings {
   double initial_accel_bias_sigma = 0.1;   ///< prior std of the initial accelerometer bias [m/s^2]
   /// Undo motion distortion in the IMU modes: with the IMU, or with constant velocity over an IMU
   /// gap. kLoam never deskews (LeGO-LOAM deskews only with an IMU; a constant-velocity deskew feeds
-  /// the frame's own noise back into the next frame).
+  /// the frame's own error back into the next frame: measured on the site runs, it oscillates from
+  /// frame to frame and loses track within metres; bench/README, "Session 12").
   bool deskew = true;
 };
 
