@@ -40,6 +40,25 @@ ScanOdometrySettings BimOdometrySettings::default_front_end() {
   return s;
 }
 
+Matrix3d front_end_step_covariance(const BimOdometrySettings& s, const Pose2& front_step, const Pose2& wheel_step,
+                                   bool matched, const Matrix3d& match_covariance) {
+  // Pose2's operators do not wrap: a step across ±π may come as ~2π. Wrap only then (exact otherwise).
+  auto wrapped = [](double a) { return std::abs(a) > 3.14159265358979323846 ? wrap_angle(a) : a; };
+  const double dist = std::hypot(front_step.x, front_step.y), turn = std::abs(wrapped(front_step.theta));
+  const double sxy = (matched ? s.motion_sigma_xy : s.fallback_sigma_xy) * dist + 1e-4;
+  const double sth = (matched ? s.motion_sigma_theta : s.fallback_sigma_theta) * (turn + dist) + 1e-5;
+  Matrix3d c = Vector3d(sxy * sxy, sxy * sxy, sth * sth).asDiagonal();
+  if (!matched) return c;
+  if (match_covariance.allFinite()) c += match_covariance;
+  // More disagreement with the wheels than their error budget: the match may be the one that is off.
+  const double dxy = std::hypot(front_step.x - wheel_step.x, front_step.y - wheel_step.y);
+  const double dth = std::abs(wrapped(front_step.theta - wheel_step.theta));
+  const double exy = std::max(0.0, dxy - s.wheel_tolerance_xy - s.wheel_tolerance_ratio * dist);
+  const double eth = std::max(0.0, dth - s.wheel_tolerance_theta - s.wheel_tolerance_ratio * turn);
+  c.diagonal() += Vector3d(exy * exy, exy * exy, eth * eth);
+  return c;
+}
+
 Matrix6d BimOdometrySettings::default_initial_covariance() {
   Vector6d d;
   const double t = 0.02, r = 0.5 * 3.14159265358979323846 / 180.0;
@@ -66,6 +85,9 @@ BimOdometry::BimOdometry(std::shared_ptr<const PointCloud> bim_cloud, const Eige
                   settings.anchor_length > 0.0 && settings.anchor_rank_threshold >= 0.0,
               "BimOdometry: anchor_sigma, anchor_effective_points and anchor_length must be > 0");
   PLUMB_CHECK(settings.T_base_lidar.matrix().allFinite(), "BimOdometry: T_base_lidar is not finite");
+  PLUMB_CHECK(settings.wheel_tolerance_xy >= 0.0 && settings.wheel_tolerance_theta >= 0.0 &&
+                  settings.wheel_tolerance_ratio >= 0.0,
+              "BimOdometry: wheel_tolerance_xy, wheel_tolerance_theta and wheel_tolerance_ratio must be >= 0");
   if (settings.use_bim) {
     PLUMB_CHECK(bim_ != nullptr, "BimOdometry: no BIM cloud (set use_bim = false for plain odometry)");
     PLUMB_CHECK(bim_->size() >= 100, "BimOdometry: the BIM cloud has " << bim_->size() << " points (need >= 100)");
@@ -97,15 +119,13 @@ BimFrameResult BimOdometry::process(const PointCloud& lidar_frame, double stamp,
   out.mode = step.mode;
   if (frame_index_ > 0) {
     const Pose2 rel = last_front_pose_.ominus().oplus(step.T_world_base);
-    const double dist = std::hypot(rel.x, rel.y), turn = std::abs(rel.theta);
     const bool matched = step.mode == ScanMatchMode::kMatched || step.mode == ScanMatchMode::kDegenerate;
-    const double sxy = (matched ? settings_.motion_sigma_xy : settings_.fallback_sigma_xy) * dist + 1e-4;
-    const double sth = (matched ? settings_.motion_sigma_theta : settings_.fallback_sigma_theta) * (turn + dist) + 1e-5;
-    Matrix3d c = Vector3d(sxy * sxy, sxy * sxy, sth * sth).asDiagonal();
-    if (matched && step.match.covariance.allFinite()) c += step.match.covariance;
+    const Pose2 wheel = last_odom_pose_.ominus().oplus(odom_pose);
+    const Matrix3d c = front_end_step_covariance(settings_, rel, wheel, matched, step.match.covariance);
     composer_.add_motion(rel.to_isometry(), planar_covariance(c, 1e-8, 1e-8));
   }
   last_front_pose_ = step.T_world_base;
+  last_odom_pose_ = odom_pose;
   out.seconds_front_end = seconds_since(t0);
   // The uncorrected chain: the front end's motion since the first frame, from the initial pose.
   if (frame_index_ == 0) first_front_pose_ = step.T_world_base;

@@ -48,6 +48,11 @@ struct BimOdometrySettings {
   double motion_sigma_theta = 0.01;   ///< [rad] per radian turned and per metre, plus PLICP's
   double fallback_sigma_xy = 0.05;    ///< [m] per metre when the step fell back to wheel odometry
   double fallback_sigma_theta = 0.05; ///< [rad] per radian and per metre likewise
+  // Wheels' error budget per step (front_end_step_covariance): a match that disagrees with the
+  // wheels' step by more gets the excess as extra std.
+  double wheel_tolerance_xy = 0.01;     ///< [m]
+  double wheel_tolerance_theta = 0.01;  ///< [rad]
+  double wheel_tolerance_ratio = 0.1;   ///< plus this fraction of the step's length (xy) or turn (θ)
   // BIM correction (SEEDS A3.3 step 5).
   bool use_bim = true;               ///< false: plain scan-matching odometry
   std::size_t correct_every = 1;     ///< register key points every k-th frame (>= 1)
@@ -70,6 +75,17 @@ struct BimOdometrySettings {
   static ScanOdometrySettings default_front_end();
   static Matrix6d default_initial_covariance();
 };
+
+/// @brief Covariance (x, y, θ; frame of the previous base pose) BimOdometry gives one front-end step.
+///
+/// `motion_sigma_*` (or `fallback_sigma_*` when the step is not a match) times the distance and turn,
+/// plus the match's own covariance; for a match, plus the square of how far its step disagrees with
+/// the wheels' step beyond `wheel_tolerance_*` + `wheel_tolerance_ratio` × the step, per component.
+/// Normal matches stay as confident as PLICP says; a scan-matching glitch (the match jumps where
+/// the wheels did not) becomes as uncertain as the jump, so the next BIM anchor passes the
+/// composer's gate and removes it instead of being rejected against an overconfident chain.
+Matrix3d front_end_step_covariance(const BimOdometrySettings& settings, const Pose2& front_step,
+                                   const Pose2& wheel_step, bool matched, const Matrix3d& match_covariance);
 
 /// @brief What happened to one frame.
 struct BimFrameResult {
@@ -121,6 +137,7 @@ class BimOdometry {
   Eigen::Isometry3d T_bim_base0_;
   Pose2 first_front_pose_;
   Pose2 last_front_pose_;
+  Pose2 last_odom_pose_;
   std::size_t frame_index_ = 0;
 };
 
