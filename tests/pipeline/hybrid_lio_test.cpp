@@ -261,6 +261,53 @@ TEST_F(HybridLioSiteTest, ImuGapFallsBackAndRecovers) {
   EXPECT_LT(position_error(last, n - 1), 1.5);
 }
 
+TEST_F(HybridLioSiteTest, ImuGapDeskewsWithTheMeanTwistOfRecentFrames) {
+  // No IMU between 3.0 and 4.0 s, driving at ~1.4 m/s: the frames whose sweep falls into the gap
+  // are deskewed with constant velocity. With the mean twist of the last five intervals (the default) the gap's worst error is
+  // lower than with the last interval alone, whose error feeds back into the next frame's deskew and
+  // grows from frame to frame, and lower than leaving the gap's frames distorted. Measured (Release):
+  // worst 0.050 m with five intervals, 0.072 m with one, 0.110 m without deskew.
+  const std::size_t n = std::min<std::size_t>(45, run_->frames.size());
+  auto worst_in_gap = [&](std::size_t twist_frames, bool deskew_gap) {
+    HybridLioSettings s = settings(LioMode::kHybrid);
+    s.deskew_twist_frames = twist_frames;
+    HybridLio lio(run_->gt.poses.front(), s);
+    std::size_t k = 0, gaps = 0;
+    double worst = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      while (k < run_->imu.size() && run_->imu[k].stamp <= run_->stamps[i] + 0.12) {
+        const ImuSample& m = run_->imu[k++];
+        if (m.stamp < 3.0 || m.stamp > 4.0) lio.add_imu(m);
+      }
+      PointCloud frame = run_->frames[i];
+      // Frames whose interval or sweep (< 0.12 s) touches the gap.
+      const bool near_gap = run_->stamps[i] + 0.12 >= 3.0 && run_->stamps[i] - 0.12 <= 4.0;
+      if (near_gap && !deskew_gap) frame.times.clear();  // no per-point times: left as fired
+      const LioFrameResult r = lio.process(frame, run_->stamps[i]);
+      gaps += r.imu_gap ? 1 : 0;
+      if (!near_gap) {
+        EXPECT_TRUE(i == 0 || (r.imu_used && r.deskewed_with_imu)) << "frame " << i;
+        continue;
+      }
+      if (r.imu_gap) {
+        EXPECT_FALSE(r.deskewed_with_imu) << "frame " << i;
+      }
+      if (!r.deskewed_with_imu) {
+        EXPECT_EQ(r.deskewed, deskew_gap) << "frame " << i;
+      }
+      worst = std::max(worst, position_error(r, i));
+    }
+    EXPECT_GE(gaps, 8u);
+    return worst;
+  };
+  const double mean5 = worst_in_gap(5, true), last1 = worst_in_gap(1, true), none = worst_in_gap(5, false);
+  std::printf("  worst error in the gap: mean of 5 intervals %.3f m, last interval %.3f m, no deskew %.3f m\n", mean5,
+              last1, none);
+  EXPECT_LT(mean5, 0.85 * last1);
+  EXPECT_LT(mean5, 0.8 * none);
+  EXPECT_LT(mean5, 0.08);
+}
+
 TEST_F(HybridLioSiteTest, BadStampsAndSamplesAreRejectedNotFatal) {
   HybridLio lio(run_->gt.poses.front(), settings(LioMode::kLoamImu));
   std::size_t k = 0;
@@ -379,6 +426,9 @@ TEST(HybridLioTest, BadSettingsAndNamesThrow) {
   EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
   s = {};
   s.map_neighbors = 2;
+  EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
+  s = {};
+  s.deskew_twist_frames = 0;
   EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
   s = {};
   s.map_plane_tolerance = 0.0;
