@@ -1,0 +1,108 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The BIM-corrected odometry's per-frame loop (issue 8's "≥ 50 frames/s single thread for 32-line
+// frames"), timed by itself instead of through `plumb run` (whose frames/s includes reading and
+// deskewing the dump).
+//
+// bim_odometry_frame/plumb/fzk_rfans32: BimOdometry::process on a simulated indoor run in
+//   AC20-FZK-Haus (rfans32, the simulator's defaults: as-built deviations, furniture, noise, wheel
+//   errors; 12 m of the route, simulated and deskewed with the wheel odometry once before timing),
+//   frames in order from the true start pose: 3D -> 2D scan, PLICP front end, ground / vertical key
+//   points, their ICP against the BIM cloud, the composer. items_per_second = frames/s.
+// bim_odometry_frame/plumb_front_end/fzk_rfans32: the same with use_bim = false (scan, PLICP and
+//   the composer only), so the difference is the BIM correction's cost.
+// No peer library implements this pipeline; its ICP is compared with PCL's and Open3D's in
+// plumb_registration_bench (icp/*), its kd-tree in plumb_search_bench.
+#include <benchmark/benchmark.h>
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include "bench_data.hpp"
+#include "plumb/bim/ifc.hpp"
+#include "plumb/bim/mesh.hpp"
+#include "plumb/io/frame_dump.hpp"
+#include "plumb/pipeline/bim_odometry.hpp"
+#include "plumb/pipeline/run.hpp"
+#include "plumb/sim/scenario.hpp"
+
+namespace {
+
+using namespace plumb;
+
+struct IndoorRun {
+  std::vector<PointCloud> frames;  // deskewed
+  std::vector<double> stamps;
+  std::vector<Pose2> odom;
+  std::shared_ptr<const PointCloud> bim_cloud;
+  Eigen::Isometry3d T0 = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_base_lidar = Eigen::Isometry3d::Identity();
+};
+
+const IndoorRun& fzk_indoor() {
+  static std::unique_ptr<IndoorRun> run;
+  if (run) return *run;
+  run = std::make_unique<IndoorRun>();
+  const bim::BimMesh mesh = bim::build_mesh(bim::read_ifc(bench::data_path("ifc/buildings/AC20-FZK-Haus.ifc")));
+  const std::string dir = "/tmp/plumb_bench_fzk_indoor_" + std::to_string(::getpid());
+  std::filesystem::remove_all(dir);
+  sim::ScenarioSettings s = sim::scenario_defaults(sim::ScenarioKind::kIndoor);
+  s.length = 12.0;
+  s.seed = 1;
+  sim::simulate_scenario(mesh, dir, s);
+  const io::FrameDumpReader dump(dir);
+  const OdometryInterpolator odom(dump.odometry());
+  run->T_base_lidar = dump.meta().T_base_lidar;
+  for (std::size_t i = 0; i < dump.num_frames(); ++i) {
+    PointCloud f = dump.frame(i);
+    deskew_frame(f, dump.stamp(i), run->T_base_lidar, [&](double t) { return odom.at(t).to_isometry(); });
+    run->frames.push_back(std::move(f));
+    run->stamps.push_back(dump.stamp(i));
+    run->odom.push_back(odom.at(dump.stamp(i)));
+  }
+  run->T0 = dump.ground_truth().poses.front();
+  run->bim_cloud = std::make_shared<PointCloud>(sample_bim_cloud(mesh, 0.05));
+  std::filesystem::remove_all(dir);
+  return *run;
+}
+
+void BM_BimOdometryFrame(benchmark::State& state, bool use_bim) {
+  const IndoorRun& run = fzk_indoor();
+  BimOdometrySettings s;
+  s.T_base_lidar = run.T_base_lidar;
+  s.use_bim = use_bim;
+  std::unique_ptr<BimOdometry> odometry;
+  std::size_t next = 0, frames = 0, anchors = 0;
+  auto restart = [&] {
+    odometry = std::make_unique<BimOdometry>(use_bim ? run.bim_cloud : nullptr, run.T0, s);
+    next = 0;
+  };
+  restart();
+  for (auto _ : state) {
+    if (next == run.frames.size()) {
+      state.PauseTiming();
+      restart();
+      state.ResumeTiming();
+    }
+    const BimFrameResult r = odometry->process(run.frames[next], run.stamps[next], run.odom[next]);
+    benchmark::DoNotOptimize(r.T_bim_base.data());
+    anchors += r.anchor.decision == AnchorDecision::kAccepted ? 1 : 0;
+    ++next;
+    ++frames;
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(frames));
+  state.counters["points_per_frame"] = static_cast<double>(run.frames.back().size());
+  if (use_bim && frames > 0) state.counters["anchors_accepted_per_frame"] = static_cast<double>(anchors) / frames;
+}
+
+}  // namespace
+
+BENCHMARK_CAPTURE(BM_BimOdometryFrame, fzk, true)->Name("bim_odometry_frame/plumb/fzk_rfans32")->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_BimOdometryFrame, fzk_front_end, false)
+    ->Name("bim_odometry_frame/plumb_front_end/fzk_rfans32")
+    ->Unit(benchmark::kMillisecond);
+
+BENCHMARK_MAIN();
