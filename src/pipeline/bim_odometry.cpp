@@ -42,9 +42,8 @@ ScanOdometrySettings BimOdometrySettings::default_front_end() {
 
 Matrix3d front_end_step_covariance(const BimOdometrySettings& s, const Pose2& front_step, const Pose2& wheel_step,
                                    bool matched, const Matrix3d& match_covariance) {
-  // Pose2's operators do not wrap: a step across ±π may come as ~2π. Wrap only then (exact otherwise).
-  auto wrapped = [](double a) { return std::abs(a) > 3.14159265358979323846 ? wrap_angle(a) : a; };
-  const double dist = std::hypot(front_step.x, front_step.y), turn = std::abs(wrapped(front_step.theta));
+  // Pose2's operators do not wrap: a step across ±π may come as ~2π.
+  const double dist = std::hypot(front_step.x, front_step.y), turn = std::abs(wrap_angle(front_step.theta));
   const double sxy = (matched ? s.motion_sigma_xy : s.fallback_sigma_xy) * dist + 1e-4;
   const double sth = (matched ? s.motion_sigma_theta : s.fallback_sigma_theta) * (turn + dist) + 1e-5;
   Matrix3d c = Vector3d(sxy * sxy, sxy * sxy, sth * sth).asDiagonal();
@@ -52,7 +51,7 @@ Matrix3d front_end_step_covariance(const BimOdometrySettings& s, const Pose2& fr
   if (match_covariance.allFinite()) c += match_covariance;
   // More disagreement with the wheels than their error budget: the match may be the one that is off.
   const double dxy = std::hypot(front_step.x - wheel_step.x, front_step.y - wheel_step.y);
-  const double dth = std::abs(wrapped(front_step.theta - wheel_step.theta));
+  const double dth = std::abs(wrap_angle(front_step.theta - wheel_step.theta));
   const double exy = std::max(0.0, dxy - s.wheel_tolerance_xy - s.wheel_tolerance_ratio * dist);
   const double eth = std::max(0.0, dth - s.wheel_tolerance_theta - s.wheel_tolerance_ratio * turn);
   c.diagonal() += Vector3d(exy * exy, exy * exy, eth * eth);

@@ -85,6 +85,8 @@ TEST(Pose2Test, WrapAngle) {
   EXPECT_NEAR(wrap_angle(kPi + 0.1), -kPi + 0.1, 1e-12);
   EXPECT_NEAR(wrap_angle(-7.0), -7.0 + 2 * kPi, 1e-12);
   EXPECT_DOUBLE_EQ(wrap_angle(0.25), 0.25);
+  // In range: returned bit for bit (fmod's round trip would change the last bits of some).
+  for (double a : {0.1, -0.3, 1e-17, kPi, -kPi + 1e-12, 2.9999999999999996}) EXPECT_EQ(wrap_angle(a), a) << a;
 }
 
 }  // namespace
