@@ -5,8 +5,11 @@
 /// @brief Where benchmarks find the shared data: env PLUMB_DATA_DIR, else the CMake cache value
 /// compiled in (see shared/data/SOURCES.md).
 
+#include <cstddef>
 #include <cstdlib>
 #include <string>
+
+#include <benchmark/benchmark.h>
 
 #include <dlfcn.h>
 
@@ -30,6 +33,28 @@ inline std::string data_path(const std::string& relative) { return data_dir() + 
 inline void single_thread_openmp() {
   using SetFn = void (*)(int);
   if (void* sym = dlsym(RTLD_DEFAULT, "omp_set_num_threads")) reinterpret_cast<SetFn>(sym)(1);
+}
+
+/// @brief Times a sequential estimator frame by frame: `step(i)` processes frame i, for i = first,
+///        first + 1, ... n - 1 in order; at the end `restart()` (untimed) makes a fresh estimator and
+///        the frames start again at `first`. Call restart() once before. Sets items_per_second =
+///        frames/s and returns the number of frames timed.
+template <class Restart, class Step>
+std::size_t time_frames_in_order(benchmark::State& state, std::size_t first, std::size_t n, Restart&& restart,
+                                 Step&& step) {
+  std::size_t next = first, frames = 0;
+  for (auto _ : state) {
+    if (next == n) {
+      state.PauseTiming();
+      restart();
+      state.ResumeTiming();
+      next = first;
+    }
+    step(next++);
+    ++frames;
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(frames));
+  return frames;
 }
 
 }  // namespace plumb::bench

@@ -137,26 +137,16 @@ void BM_LioFrame(benchmark::State& state, LioMode mode, bool every_frame_icp) {
   s.mode = mode;
   if (every_frame_icp) s.min_plane_points = std::numeric_limits<std::size_t>::max();
   std::unique_ptr<HybridLio> lio;
-  std::size_t next = 0, frames = 0;
   auto restart = [&] {
     lio = std::make_unique<HybridLio>(run.T0, s);
     for (const ImuSample& m : run.imu) lio->add_imu(m);
     lio->process(run.frames[0], run.stamps[0]);  // the first frame only starts the map
-    next = 1;
   };
   restart();
-  for (auto _ : state) {
-    if (next == run.frames.size()) {
-      state.PauseTiming();
-      restart();
-      state.ResumeTiming();
-    }
-    const LioFrameResult r = lio->process(run.frames[next], run.stamps[next]);
+  bench::time_frames_in_order(state, 1, run.frames.size(), restart, [&](std::size_t i) {
+    const LioFrameResult r = lio->process(run.frames[i], run.stamps[i]);
     benchmark::DoNotOptimize(r.T_world_base.data());
-    ++next;
-    ++frames;
-  }
-  state.SetItemsProcessed(static_cast<std::int64_t>(frames));
+  });
   state.counters["points_per_frame"] = static_cast<double>(run.frames.back().size());
 }
 

@@ -75,25 +75,14 @@ void BM_BimOdometryFrame(benchmark::State& state, bool use_bim) {
   s.T_base_lidar = run.T_base_lidar;
   s.use_bim = use_bim;
   std::unique_ptr<BimOdometry> odometry;
-  std::size_t next = 0, frames = 0, anchors = 0;
-  auto restart = [&] {
-    odometry = std::make_unique<BimOdometry>(use_bim ? run.bim_cloud : nullptr, run.T0, s);
-    next = 0;
-  };
+  std::size_t anchors = 0;
+  auto restart = [&] { odometry = std::make_unique<BimOdometry>(use_bim ? run.bim_cloud : nullptr, run.T0, s); };
   restart();
-  for (auto _ : state) {
-    if (next == run.frames.size()) {
-      state.PauseTiming();
-      restart();
-      state.ResumeTiming();
-    }
-    const BimFrameResult r = odometry->process(run.frames[next], run.stamps[next], run.odom[next]);
+  const std::size_t frames = bench::time_frames_in_order(state, 0, run.frames.size(), restart, [&](std::size_t i) {
+    const BimFrameResult r = odometry->process(run.frames[i], run.stamps[i], run.odom[i]);
     benchmark::DoNotOptimize(r.T_bim_base.data());
     anchors += r.anchor.decision == AnchorDecision::kAccepted ? 1 : 0;
-    ++next;
-    ++frames;
-  }
-  state.SetItemsProcessed(static_cast<std::int64_t>(frames));
+  });
   state.counters["points_per_frame"] = static_cast<double>(run.frames.back().size());
   if (use_bim && frames > 0) state.counters["anchors_accepted_per_frame"] = static_cast<double>(anchors) / frames;
 }
