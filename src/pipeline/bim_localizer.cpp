@@ -103,6 +103,8 @@ void check_settings(const BimLocalizerSettings& s) {
               "BimLocalizer: search_see_through = " << s.search_see_through << " must be >= 0");
   PLUMB_CHECK(std::isfinite(s.max_refine_shift) && s.max_refine_shift > 0.0,
               "BimLocalizer: max_refine_shift = " << s.max_refine_shift << " must be > 0");
+  PLUMB_CHECK(std::isfinite(s.retry_shift) && s.retry_shift >= 0.0,
+              "BimLocalizer: retry_shift = " << s.retry_shift << " must be >= 0");
 }
 
 }  // namespace
@@ -296,6 +298,31 @@ BimLocalization BimLocalizer::localize(const PointCloud& frame, const Eigen::Iso
     out.ambiguous = out.fine.overlap - other.overlap < settings_.ambiguity_overlap_margin ||
                     out.score < settings_.min_score_when_ambiguous;
   }
+  out.refine_starts = 1;
+  const bool hinted_weak = hint && out.score >= settings_.min_score_hinted && out.score < settings_.min_score;
+  if (hinted_weak && settings_.retry_shift > 0.0 && out.fine.overlap < settings_.min_overlap_hinted) {
+    // Before a weak hinted match is rejected for its overlap: the ICP may sit in a local optimum
+    // next to the true pose, along the direction the frame's walls constrain least. Try starts on
+    // either side of the 2D pose along it.
+    Eigen::Matrix2d walls_info = Eigen::Matrix2d::Zero();
+    for (const Vector2d& n : normals)
+      if (n.allFinite()) walls_info += n * n.transpose();
+    if (walls_info.trace() > 0.0) {
+      const Vector2d weak_base = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(walls_info).eigenvectors().col(0);
+      const Vector2d weak = out.T_bim_base_search.linear().topLeftCorner<2, 2>() * weak_base;
+      for (const double side : {1.0, -1.0}) {
+        Eigen::Isometry3d T_start = out.T_bim_base_search;
+        T_start.translation().head<2>() += side * settings_.retry_shift * weak;
+        IcpResult retry = refine_localization(frame, fine_, T_start * T_base_lidar, settings_.fine);
+        ++out.refine_starts;
+        const Eigen::Isometry3d T_base = retry.T_target_source * T_base_lidar.inverse();
+        const double moved = (T_base.translation() - out.T_bim_base_search.translation()).norm();
+        const bool better =
+            retry.status == Status::kOk && (out.fine.status != Status::kOk || retry.overlap > out.fine.overlap);
+        if (better && moved <= settings_.max_refine_shift) out.fine = std::move(retry);
+      }
+    }
+  }
   out.T_bim_base = out.fine.T_target_source * T_base_lidar.inverse();
   out.seconds_fine = seconds_since(t1);
 
@@ -309,8 +336,7 @@ BimLocalization BimLocalizer::localize(const PointCloud& frame, const Eigen::Iso
     out.see_through = result_map->solid->see_through(scan, refined, sensor, settings_.see_through_margin);
   }
   out.truncated = truncated;
-  const bool score_ok = out.score >= settings_.min_score ||
-                        (hint && out.score >= settings_.min_score_hinted && out.fine.overlap >= settings_.min_overlap_hinted);
+  const bool score_ok = out.score >= settings_.min_score || (hinted_weak && out.fine.overlap >= settings_.min_overlap_hinted);
   if (!score_ok || out.ambiguous || out.truncated || shift > settings_.max_refine_shift ||
       out.see_through > settings_.max_see_through) {
     out.status = Status::kRejected;
