@@ -194,7 +194,7 @@ HybridLio::HybridLio(const Eigen::Isometry3d& T_world_base0, const HybridLioSett
               "HybridLio: settings.icp_voxel_size / plane_query_voxel / ground_query_voxel must be > 0");
   PLUMB_CHECK(s.gravity > 0.0 && std::isfinite(s.gravity), "HybridLio: settings.gravity must be > 0");
   PLUMB_CHECK(s.max_imu_gap > 0.0, "HybridLio: settings.max_imu_gap must be > 0");
-  PLUMB_CHECK(s.deskew_twist_frames >= 1, "HybridLio: settings.deskew_twist_frames must be >= 1");
+  PLUMB_CHECK(s.twist_frames >= 1, "HybridLio: settings.twist_frames must be >= 1");
   PLUMB_CHECK(s.map_rebuild_distance >= 0.0 && s.map_rebuild_frames >= 1,
               "HybridLio: settings.map_rebuild_distance must be >= 0 and map_rebuild_frames >= 1");
   PLUMB_CHECK(s.initial_velocity_sigma > 0.0 && s.initial_gyro_bias_sigma > 0.0 && s.initial_accel_bias_sigma > 0.0,
@@ -252,9 +252,9 @@ bool HybridLio::imu_covers(double t0, double t1) const {
 
 void HybridLio::remember_pose(double stamp) {
   recent_poses_.emplace_back(stamp, pose_of(state_));
-  while (recent_poses_.size() > settings_.deskew_twist_frames + 1) recent_poses_.pop_front();
+  while (recent_poses_.size() > settings_.twist_frames + 1) recent_poses_.pop_front();
   const auto& [t0, T0] = recent_poses_.front();
-  deskew_twist_ = recent_poses_.size() < 2 ? Vector6d::Zero() : Vector6d(se3::log(T0.inverse() * pose_of(state_)) / (stamp - t0));
+  twist_ = recent_poses_.size() < 2 ? Vector6d::Zero() : Vector6d(se3::log(T0.inverse() * pose_of(state_)) / (stamp - t0));
 }
 
 void HybridLio::deskew(PointCloud& cloud, double stamp, const ImuState& x, bool use_imu, LioFrameResult& res) const {
@@ -298,11 +298,11 @@ void HybridLio::deskew(PointCloud& cloud, double stamp, const ImuState& x, bool 
     }
     res.deskewed_with_imu = true;
   } else {
-    // Constant velocity: the mean body twist of the last few intervals (see deskew_twist_frames).
+    // Constant velocity: the mean body twist of the last few intervals (see twist_frames).
     const int n = std::max(2, static_cast<int>(std::ceil(t_max / 0.005)));
     for (int i = 1; i <= n; ++i) {
       const double t = t_max * i / n;
-      const Eigen::Isometry3d T = se3::exp(deskew_twist_ * t);
+      const Eigen::Isometry3d T = se3::exp(twist_ * t);
       kt.push_back(t);
       kR.push_back(T.linear());
       kp.push_back(T.translation());
@@ -695,9 +695,7 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
     xj.bias = state_.bias;
     reset_prior();
   }
-  const Eigen::Isometry3d T_prev = pose_of(state_);
   state_ = xj;
-  twist_ = se3::log(T_prev.inverse() * pose_of(state_)) / dt;
   remember_pose(stamp);
   last_stamp_ = stamp;
   ++num_frames_;

@@ -270,7 +270,7 @@ TEST_F(HybridLioSiteTest, ImuGapDeskewsWithTheMeanTwistOfRecentFrames) {
   const std::size_t n = std::min<std::size_t>(45, run_->frames.size());
   auto worst_in_gap = [&](std::size_t twist_frames, bool deskew_gap) {
     HybridLioSettings s = settings(LioMode::kHybrid);
-    s.deskew_twist_frames = twist_frames;
+    s.twist_frames = twist_frames;
     HybridLio lio(run_->gt.poses.front(), s);
     std::size_t k = 0, gaps = 0;
     double worst = 0.0;
@@ -306,6 +306,50 @@ TEST_F(HybridLioSiteTest, ImuGapDeskewsWithTheMeanTwistOfRecentFrames) {
   EXPECT_LT(mean5, 0.85 * last1);
   EXPECT_LT(mean5, 0.8 * none);
   EXPECT_LT(mean5, 0.08);
+}
+
+TEST_F(HybridLioSiteTest, LidarOnlyPredictsWithTheMeanTwistOfRecentFrames) {
+  // LiDAR only; in four windows of five frames the LiDAR returns almost nothing, so those frames
+  // are the constant-velocity prediction alone: the previous pose moved on by the mean body twist
+  // of the last `twist_frames` intervals (of the IMU frame, as the estimator keeps its state).
+  const std::size_t n = run_->frames.size();
+  PointCloud blank;
+  blank.points = {Vector3f(1, 2, 0), Vector3f(5, -3, 1), Vector3f(-4, 0.5f, 0.2f)};
+  const Eigen::Isometry3d T_base_imu = run_->meta.T_base_imu;
+  auto drift = [&](std::size_t twist_frames) {
+    HybridLioSettings s = settings(LioMode::kLoam);
+    s.twist_frames = twist_frames;
+    HybridLio lio(run_->gt.poses.front(), s);
+    std::vector<Eigen::Isometry3d> imu_poses;
+    double total = 0.0, before = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t phase = i % (n / 4);
+      const bool lost = phase >= n / 8 && phase < n / 8 + 5;
+      const LioFrameResult r = lio.process(lost ? blank : run_->frames[i], run_->stamps[i]);
+      imu_poses.push_back(r.T_world_base * T_base_imu);
+      if (lost) {
+        EXPECT_EQ(r.mode, LioFrameMode::kPrediction) << "frame " << i;
+        const std::size_t j = i - 1, j0 = i - 1 - std::min(twist_frames, i - 1);
+        const Vector6d twist = se3::log(imu_poses[j0].inverse() * imu_poses[j]) / (run_->stamps[j] - run_->stamps[j0]);
+        const Eigen::Isometry3d expected = imu_poses[j] * se3::exp(twist * (run_->stamps[i] - run_->stamps[j]));
+        EXPECT_LT((expected.translation() - imu_poses[i].translation()).norm(), 1e-6) << "frame " << i;
+        EXPECT_LT(Eigen::AngleAxisd(expected.linear().transpose() * imu_poses[i].linear()).angle(), 1e-6) << "frame " << i;
+      }
+      if (phase == n / 8 - 1) before = position_error(r, i);
+      if (phase == n / 8 + 4) total += position_error(r, i) - before;
+    }
+    return total;
+  };
+  // What the five lost frames add to the error, summed over the windows. Here (near the house, the
+  // registration well constrained, the robot speeding up to 1.5 m/s and braking) the last interval
+  // bridges them better: a mean lags a changing speed. Measured (Release): 0.276 m with five
+  // intervals, 0.151 m with one. On whole site routes the registration is noisy along the road and
+  // the mean wins by far (bench/README, "Session 14"). A broken prediction goes metres off.
+  const double mean5 = drift(5), last1 = drift(1);
+  std::printf("  growth of the error over the lost frames (4 windows): mean of 5 intervals %.3f m, last interval %.3f m\n",
+              mean5, last1);
+  EXPECT_LT(mean5, 0.5);
+  EXPECT_LT(last1, 0.5);
 }
 
 TEST_F(HybridLioSiteTest, BadStampsAndSamplesAreRejectedNotFatal) {
@@ -428,7 +472,7 @@ TEST(HybridLioTest, BadSettingsAndNamesThrow) {
   s.map_neighbors = 2;
   EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
   s = {};
-  s.deskew_twist_frames = 0;
+  s.twist_frames = 0;
   EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
   s = {};
   s.map_plane_tolerance = 0.0;

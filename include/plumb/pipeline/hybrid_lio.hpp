@@ -167,11 +167,14 @@ struct HybridLioSettings {
   /// the frame's own error back into the next frame: measured on the site runs, it oscillates from
   /// frame to frame and loses track within metres; bench/README, "Session 12").
   bool deskew = true;
-  /// Over an IMU gap the constant-velocity deskew uses the mean body twist of the last this many
-  /// frame intervals. One interval feeds the frame's own registration error straight back into the
-  /// next frame's deskew and oscillates (bench/README, "Session 13": a 1 s gap at 1.4-1.5 m/s, worst
-  /// error 7.2 cm with one interval, 5.0 cm with five, 11 cm without deskew). >= 1.
-  std::size_t deskew_twist_frames = 5;
+  /// The constant-velocity model (the prediction without IMU data: kLoam, and IMU modes over an IMU
+  /// gap; the deskew over an IMU gap) uses the mean body twist of the last this many frame
+  /// intervals. One interval feeds a frame's own registration error straight into the next frame:
+  /// the deskew oscillates (bench/README, "Session 13": a 1 s gap at 1.4-1.5 m/s, worst error 7.2 cm
+  /// with one interval, 5.0 cm with five, 11 cm without deskew), and kLoam's prediction carries
+  /// every velocity error on (bench/README, "Session 14": site runs, seeds 1-5, end error lower on
+  /// all ten with five intervals, median 109 -> 43 m on FZK-Haus, 291 -> 76 m on duplex). >= 1.
+  std::size_t twist_frames = 5;
 };
 
 /// @brief What HybridLio::process() did with one frame.
@@ -240,7 +243,7 @@ class HybridLio {
   const VoxelHashMap& point_map() const { return point_map_; }    ///< @brief Local ICP point map.
 
  private:
-  /// Appends the current pose to recent_poses_ and updates deskew_twist_.
+  /// Appends the current pose to recent_poses_ and updates twist_.
   void remember_pose(double stamp);
   void deskew(PointCloud& cloud, double stamp, const ImuState& at_stamp, bool use_imu, LioFrameResult& res) const;
   bool imu_covers(double t0, double t1) const;
@@ -251,8 +254,8 @@ class HybridLio {
   Eigen::Isometry3d T_imu_lidar_ = Eigen::Isometry3d::Identity();
   ImuState state_;
   Eigen::Matrix<double, 15, 15> prior_information_ = Eigen::Matrix<double, 15, 15>::Zero();
-  Vector6d twist_ = Vector6d::Zero();  ///< body twist per second of the IMU frame (constant velocity)
-  Vector6d deskew_twist_ = Vector6d::Zero();  ///< mean twist of the last deskew_twist_frames intervals
+  /// Constant velocity: mean body twist per second of the IMU frame over the last twist_frames intervals.
+  Vector6d twist_ = Vector6d::Zero();
   std::deque<std::pair<double, Eigen::Isometry3d>> recent_poses_;  ///< (stamp, T_world_imu) of the last frames
   std::vector<ImuSample> imu_;
   double last_imu_stamp_ = -1e300;
