@@ -300,7 +300,8 @@ BimLocalization BimLocalizer::localize(const PointCloud& frame, const Eigen::Iso
   }
   out.refine_starts = 1;
   const bool hinted_weak = hint && out.score >= settings_.min_score_hinted && out.score < settings_.min_score;
-  if (hinted_weak && settings_.retry_shift > 0.0 && out.fine.overlap < settings_.min_overlap_hinted) {
+  // (An ambiguous result is rejected whatever its overlap: no retry.)
+  if (hinted_weak && !out.ambiguous && settings_.retry_shift > 0.0 && out.fine.overlap < settings_.min_overlap_hinted) {
     // Before a weak hinted match is rejected for its overlap: the ICP may sit in a local optimum
     // next to the true pose, along the direction the frame's walls constrain least. Try starts on
     // either side of the 2D pose along it.
