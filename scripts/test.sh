@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: BSD-3-Clause
 # README command 2 (and CI): install what is missing; release build with -Werror (library, CLI,
-# examples, benchmarks) and the find_package consumer; every test built and run under ASan+UBSan;
-# each fuzzer for PLUMB_FUZZ_SECONDS (30).
+# examples, benchmarks) and the find_package consumer; the demo's steps of README command 1 on that
+# build; every test built and run under ASan+UBSan; each fuzzer for PLUMB_FUZZ_SECONDS (30).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root="$(pwd)"
@@ -38,6 +38,10 @@ cmake --install build/ci >/dev/null
 cmake -S tests/package -B build/package -DCMAKE_PREFIX_PATH="$root/build/ci/prefix" >/dev/null
 cmake --build build/package -j"$jobs"
 ./build/package/plumb_consumer
+
+step "README command 1's demo steps on this build (scripts/run_demo.sh)"
+# The same script scripts/demo.sh ends with: if a new user's first command would fail, CI fails.
+bash scripts/run_demo.sh build/ci build/ci/demo
 
 step "ASan + UBSan build (-Werror): library, CLI, every test"
 # The test suite is compiled once, with the sanitizers, and every test runs under ASan + UBSan: a
