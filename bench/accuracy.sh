@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: BSD-3-Clause
-# Accuracy suite of the BIM-corrected odometry (issue 8): for each building, `plumb simulate` with the
+# Accuracy suite of the BIM-corrected odometry: for each building, `plumb simulate` with the
 # defaults (rfans32, two loops of the indoor route, as-built deviations σ 1 cm / 0.2°, furniture,
 # range noise, wheel errors, motion distortion), then `plumb run` with the first frame localized in
-# the building, and the seed's Table 2 against the exact ground truth as one markdown table.
+# the building, and Table 2 of Liu et al. 2022 (end error of wheel odometry, LiDAR odometry and the
+# BIM-corrected odometry as % of the distance) against the exact ground truth as one markdown table.
 #
 # usage: bash bench/accuracy.sh [PLUMB_BINARY] [OUT_DIR]
 #   PLUMB_BINARY  default build/rel/examples/plumb (a Release build: `cmake --build build/rel`)

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Voxel-grid downsampling: plumb (centroid = like-for-like with the peers, and nearest-to-centroid,
-// the SEEDS A1.2 default) against PCL's VoxelGrid<PointXYZ> and Open3D's VoxelDownSample, on the
-// same real clouds at a 0.1 m leaf, single thread. Conversion to the peers' cloud types happens
-// once, outside the timed loops. Names: voxel_grid/<impl>/<dataset>.
+// plumb's default, as in Liu et al. 2022, sec. 1.2) against PCL's VoxelGrid<PointXYZ> and Open3D's
+// VoxelDownSample, on the same real clouds at a 0.1 m leaf, single thread. Conversion to the peers'
+// cloud types happens once, outside the timed loops. Names: voxel_grid/<impl>/<dataset>.
 
 #include <cstdlib>
 #include <fstream>

@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: BSD-3-Clause
-# Accuracy suite of the LiDAR/IMU odometry (issue 9, SEEDS B): for each building and noise seed,
+# Accuracy suite of the LiDAR/IMU odometry (Zhou et al. 2021): for each building and noise seed,
 # `plumb simulate --scenario site` (a VLP-16 robot driving around the building and out into the
 # open, ~340-390 m, exact ground truth), then `plumb lio` in the three modes with a 150-frame map
-# window (no implicit loop closure, like the seed's runs), and one markdown table of the mean
-# translational RPE over 10 m and the end error (from plumb lio's report, against the dump's exact
-# gt.tum), with the hybrid's ratios to LiDAR only and to LOAM + IMU (issue 9's targets).
+# window (no implicit loop closure, like the runs of Zhou et al. 2021), and one markdown table of
+# the mean translational RPE over 10 m and the end error (from plumb lio's report, against the dump's exact
+# gt.tum), with the hybrid's ratios to LiDAR only and to LOAM + IMU (targets: hybrid RPE <= 0.67 of
+# LiDAR only's and <= 0.89 of LOAM + IMU's, hybrid end error <= 0.2 of LiDAR only's).
 #
 # usage: bash bench/lio_site.sh [PLUMB_BINARY] [OUT_DIR] [SEED...]
 #   PLUMB_BINARY  default build/rel/examples/plumb (a Release build: `cmake --build build/rel`)

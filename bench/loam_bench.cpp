@@ -2,7 +2,8 @@
 // LOAM front end on the real HDL-32E pair (shared/data/cloud3d/hdl32_pair): range image + cosine
 // features per frame, and scan-to-scan matching per frame (frames per second = items_per_second).
 // "hdl32" is the full 32-ring frame (~69k points); "hdl32_16ring" keeps every other ring (a
-// 16-line frame of ~35k points, the paper's sensor class and the speed target).
+// 16-line frame of ~35k points: the sensor class of Zhou et al. 2021, for which the target is
+// ≥ 50 frames/s).
 // No peer library implements LOAM features, so no peer runs here.
 // lio_frame/plumb/site16: one frame of the LiDAR/IMU hybrid odometry (deskew, features, joint
 // IMU + LiDAR solve, local map update) on a simulated 16-line site run around FZK-Haus

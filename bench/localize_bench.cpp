@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Finding a robot's first LiDAR frame in a building model, no initial guess: plumb's BimLocalizer
-// (floor-plan branch and bound + ICP), the seed's chain as plumb implements it
+// (floor-plan branch and bound + ICP), the chain of Liu et al. 2022, sec. 1, as plumb implements it
 // (localize_coarse_to_fine: FPFH + SAC-IA + ICP), and Open3D (FPFH + RANSAC feature matching +
 // point-to-plane ICP), on the same simulated frames of AC20-FZK-Haus against the same BIM cloud.
 // Each benchmark iteration localizes one frame (cycling through 5); the counter `found` is the
@@ -120,7 +120,7 @@ std::shared_ptr<o3g::PointCloud> to_open3d(const plumb::PointCloud& c) {
 void bm_open3d(benchmark::State& state) {
   const Data& d = data();
   if (!d.ok) return state.SkipWithError("AC20-FZK-Haus.ifc missing (PLUMB_DATA_DIR)");
-  // The same lengths as plumb's seed chain: 0.3 m coarse voxel, normals 0.6 m, FPFH 1.5 m.
+  // The same lengths as plumb's FPFH + SAC-IA chain: 0.3 m coarse voxel, normals 0.6 m, FPFH 1.5 m.
   const double voxel = 0.3;
   auto target = to_open3d(d.bim_cloud)->VoxelDownSample(voxel);
   target->EstimateNormals(o3g::KDTreeSearchParamHybrid(2 * voxel, 30));

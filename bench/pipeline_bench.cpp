@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// The BIM-corrected odometry's per-frame loop (issue 8's "≥ 50 frames/s single thread for 32-line
-// frames"), timed by itself instead of through `plumb run` (whose frames/s includes reading and
+// The BIM-corrected odometry's per-frame loop (the target: ≥ 50 frames/s single thread for 32-line
+// frames), timed by itself instead of through `plumb run` (whose frames/s includes reading and
 // deskewing the dump).
 //
 // bim_odometry_frame/plumb/fzk_rfans32: BimOdometry::process on a simulated indoor run in

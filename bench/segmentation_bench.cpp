@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Scan processing speed (SEEDS A2): ground plane on room_scan1 against PCL and Open3D plane RANSAC
-// (same 5 cm threshold, 1000-iteration cap, 15 deg axis tolerance for PCL's perpendicular-plane
-// model, Open3D single thread), and cloud -> scan and the whole segment_frame() on a 32-line frame.
+// Scan processing speed (Liu et al. 2022, sec. 2): ground plane on room_scan1 against PCL and
+// Open3D plane RANSAC (same 5 cm threshold, 1000-iteration cap, 15 deg axis tolerance for PCL's
+// perpendicular-plane model, Open3D single thread), and cloud -> scan and the whole
+// segment_frame() on a 32-line frame.
 // Counters: inliers found and the plane offset D (n.p = D, m), to see which plane each one found.
 
 #include <cmath>
