@@ -3,8 +3,8 @@
 // product on the built-in sample. Writes the procedural demo office (IFC4), simulates a robot driving
 // two loops through it (rfans32 LiDAR, wheel encoders, IMU, as-built deviations, furniture, people),
 // localizes the first frame in the model (BimLocalizer, no hint; --surveyed-start starts at the
-// true pose instead), runs the BIM-corrected odometry and prints the seed's Table 2 (wheel odometry, LiDAR without BIM,
-// BIM-corrected) against the exact ground truth.
+// true pose instead), runs the BIM-corrected odometry and prints the error table of Liu et al. 2022,
+// Table 2 (wheel odometry, LiDAR without BIM, BIM-corrected) against the exact ground truth.
 // DIR receives demo_office.ifc, dump/ (the frame dump) and run/ (what `plumb run` writes).
 
 #include <chrono>

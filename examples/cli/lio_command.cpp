@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // `plumb lio DIR --mode loam|loam-imu|hybrid -o OUT [--json]`: the LiDAR/IMU hybrid odometry
-// (SEEDS B) over a frame dump. Writes OUT/trajectory.tum (base pose at the frame stamps; the first
+// (Zhou et al. 2021) over a frame dump. Writes OUT/trajectory.tum (base pose at the frame stamps; the first
 // frame at gt.tum's first pose when the dump has one, identity otherwise) and OUT/report.json
 // (frames per mode, timings, failures, and with ground truth the RPE over 10 m and the end error).
 
@@ -184,7 +184,7 @@ void run(const LioOptions& o) {
 
 void register_lio_command(CLI::App& app) {
   auto o = std::make_shared<LioOptions>();
-  CLI::App* cmd = app.add_subcommand("lio", "LiDAR/IMU hybrid odometry over a frame dump (SEEDS B)");
+  CLI::App* cmd = app.add_subcommand("lio", "LiDAR/IMU hybrid odometry over a frame dump (Zhou et al. 2021)");
   cmd->add_option("DIR", o->dump_dir, "Frame dump directory (plumb simulate, or your robot's own)")->required();
   cmd->add_option("--mode", o->mode, "loam (LiDAR only), loam-imu (IMU + LOAM), hybrid (IMU + LOAM or ICP)")
       ->check(CLI::IsMember({"loam", "loam-imu", "hybrid"}))
@@ -202,13 +202,13 @@ void register_lio_command(CLI::App& app) {
                   "route comes back; 0: everything within 60 m)")
       ->check(CLI::Range(0, 1000000000));
   cmd->add_option("--icp-metric", o->icp_metric,
-                  "Hybrid ICP frames: point-to-point (SEEDS eq. 20) or point-to-distribution (each pair weighted "
-                  "by the covariance of its map neighbours)")
+                  "Hybrid ICP frames: point-to-point (Zhou et al. 2021, eq. 20) or point-to-distribution "
+                  "(each pair weighted by the covariance of its map neighbours)")
       ->check(CLI::IsMember({"point-to-point", "point-to-distribution"}))
       ->capture_default_str();
   cmd->add_flag("--icp-only", o->icp_only,
-                "Hybrid ICP frames use the ICP residuals alone (SEEDS: E_B + E_L2), not with the LOAM ones the "
-                "map still gives");
+                "Hybrid ICP frames use the ICP residuals alone (Zhou et al. 2021, eq. 21: E_B + E_L2), "
+                "not with the LOAM ones the map still gives");
   cmd->callback([o]() { run(*o); });
 }
 

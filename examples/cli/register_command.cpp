@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // `plumb register SOURCE TARGET [--voxel V] [--seed S] [--json]`: global registration of two clouds
-// (voxel -> normals -> FPFH -> SAC-IA with the Huber score -> overlap-gated ICP, SEEDS A1) and the
-// resulting 4x4 T_target_source, which maps source points into the target frame.
+// (voxel -> normals -> FPFH -> SAC-IA with the Huber score -> overlap-gated ICP, Liu et al. 2022,
+// sec. 1) and the resulting 4x4 T_target_source, which maps source points into the target frame.
 
 #include <cmath>
 #include <cstdint>

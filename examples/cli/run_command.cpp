@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // `plumb run DIR --bim MODEL.ifc -o OUT [--json]`: the BIM-corrected odometry over a frame dump.
 // Writes OUT/wheel.tum, OUT/lidar.tum, OUT/bim.tum (BIM frame, frame stamps), OUT/report.json and
-// OUT/trajectory.svg; with ground truth in the dump, prints the seed's Table 2.
+// OUT/trajectory.svg; with ground truth in the dump, prints the error table of Liu et al. 2022, Table 2.
 
 #include <iostream>
 #include <memory>
@@ -62,7 +62,8 @@ void run(const RunOptions& o) {
 
 void register_run_command(CLI::App& app) {
   auto o = std::make_shared<RunOptions>();
-  CLI::App* cmd = app.add_subcommand("run", "BIM-corrected laser odometry over a frame dump (SEEDS A3)");
+  CLI::App* cmd =
+      app.add_subcommand("run", "BIM-corrected laser odometry over a frame dump (Liu et al. 2022, sec. 3)");
   cmd->add_option("DIR", o->dump_dir, "Frame dump directory (plumb simulate, or your robot's own)")->required();
   cmd->add_option("--bim", o->model, "The building model (IFC)")->required();
   cmd->add_option("-o,--output", o->out_dir, "Output directory")->required();

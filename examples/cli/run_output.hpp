@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // What `plumb run` and `plumb demo` both do with a RunReport: the output files, the JSON report
-// and the seed's Table 2 on stdout.
+// and the error table of Liu et al. 2022, Table 2, on stdout.
 
 #include <functional>
 #include <string>

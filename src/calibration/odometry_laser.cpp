@@ -152,7 +152,7 @@ Pose2 differential_drive_motion(double radius_left, double radius_right, double 
 Pose2 predicted_laser_motion(const OdometryLaserParams& params, const CalibrationTuple& tuple) {
   const Pose2 r = differential_drive_motion(params.radius_left, params.radius_right, params.axle,
                                             tuple.T, tuple.phi_left, tuple.phi_right);
-  return params.laser.ominus().oplus(r).oplus(params.laser);  // SEEDS eq. 14
+  return params.laser.ominus().oplus(r).oplus(params.laser);  // Liu et al. 2022, eq. 14
 }
 
 Matrix6d odometry_laser_information(const std::vector<CalibrationTuple>& tuples,

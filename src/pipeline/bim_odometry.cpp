@@ -100,7 +100,7 @@ BimFrameResult BimOdometry::process(const PointCloud& lidar_frame, double stamp,
   BimFrameResult out;
   out.stamp = stamp;
 
-  // SEEDS A2.1: the planar scan in the base frame, from a band around the LiDAR's height.
+  // Liu et al. 2022, sec. 2.1: the planar scan in the base frame, from a band around the LiDAR's height.
   CloudToScanSettings cs;
   const double h = settings_.T_base_lidar.translation().z();
   cs.min_height = h - settings_.scan_band;
@@ -139,7 +139,7 @@ BimFrameResult BimOdometry::process(const PointCloud& lidar_frame, double stamp,
 
 void BimOdometry::correct(const PointCloud& lidar_frame, BimFrameResult& out) {
   const auto t0 = std::chrono::steady_clock::now();
-  // SEEDS A2.4-A2.5: ground and vertical-plane key points of the frame.
+  // Liu et al. 2022, sec. 2.2: ground and vertical-plane key points of the frame.
   const SegmentResult seg = segment_frame(lidar_frame, settings_.segment);
   PointCloud keys;
   for (std::size_t i = 0; i < seg.labels.size(); ++i) {
@@ -154,7 +154,7 @@ void BimOdometry::correct(const PointCloud& lidar_frame, BimFrameResult& out) {
   out.seconds_segment = seconds_since(t0);
   if (keys.size() < settings_.min_anchor_inliers) return;
 
-  // SEEDS A3.3 step 5: key points at the composed pose, registered to the BIM cloud.
+  // Liu et al. 2022, sec. 3.3, loop step (5): key points at the composed pose, registered to the BIM cloud.
   const auto t1 = std::chrono::steady_clock::now();
   out.anchor_attempted = true;
   const Eigen::Isometry3d T_pred = composer_.pose() * settings_.T_base_lidar;

@@ -41,7 +41,7 @@ Vector15d state_error(const ImuState& x, const ImuState& m) {
 double huber_rho(double s, double k) { return s <= k * k ? s : 2.0 * k * std::sqrt(s) - k * k; }
 double huber_weight(double s, double k) { return s <= k * k ? 1.0 : k / std::sqrt(s); }
 
-/// The LiDAR residuals of SEEDS eq. 6, 7, 20 as functions of the IMU state j: a query point s in
+/// The LiDAR residuals of Zhou et al. 2021, eq. 6, 7, 20, as functions of the IMU state j: a query point s in
 /// the IMU frame maps to q = R s + p; Jacobians w.r.t. [dphi, dp] (right perturbation of R, p + dp).
 /// A correspondence's weight multiplies its whitened residual (1: its kind's sigma). Returns 1/2 sum
 /// rho; adds the IRLS-weighted normal equations, and to sum_sq the squared residuals [m^2], when H
@@ -406,13 +406,13 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
   }
   res.imu_used = pim.has_value();
 
-  // 2. Deskew to the stamp, then range image and cosine features (SEEDS B1.1-1.2).
+  // 2. Deskew to the stamp, then range image and cosine features (Zhou et al. 2021, sec. 1.1-1.2).
   PointCloud cloud = frame_lidar;
   if (imu_mode) deskew(cloud, stamp, pred, pim.has_value() || !initialized_, res);
   // The image is built on the deskewed points, so near the sensor a ring loses the points whose
   // azimuth moved into a neighbour's column. Building it from the frame as fired (LOAM's order)
-  // keeps the rings whole, but made both simulated site runs drift more (2026-12-02: FZK end error
-  // 0.009 -> 0.71 m, duplex 3.7 -> ~8 m, hybrid mode). Why is not understood yet; see issue 9.
+  // keeps the rings whole, but made both simulated site runs drift more (hybrid mode, end error:
+  // FZK-Haus 0.71 m against 0.009 m, duplex ~8 m against 3.7 m). The cause is open.
   const RangeImage image = build_range_image(cloud, set.image);
   LoamFeatures feats = extract_loam_features(cloud, image, set.features);
   res.num_plane_points = feats.planes.size();
@@ -487,7 +487,7 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
     return finish(res);
   }
 
-  // 3. The hybrid switch (SEEDS B3.2).
+  // 3. The hybrid switch (Zhou et al. 2021, sec. 3.2).
   LioFrameMode lidar_mode = LioFrameMode::kLoam;
   if (set.mode == LioMode::kHybrid && !set.switch_on_plane_matches && res.num_structure_planes < set.min_plane_points) {
     lidar_mode = LioFrameMode::kIcp;
@@ -551,7 +551,7 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
   };
 
   // 4. Joint problem over x_i (offset 0) and x_j (offset 15) with the IMU factor, or over the
-  //    pose of x_j alone (offset 0) without it (SEEDS B eq. 19-22).
+  //    pose of x_j alone (offset 0) without it (Zhou et al. 2021, eq. 19-22).
   const bool with_imu = pim.has_value();
   const int oj = with_imu ? 15 : 0;
   const int n = with_imu ? 30 : 6;

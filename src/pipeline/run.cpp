@@ -102,7 +102,7 @@ RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& 
     return f;
   };
 
-  // SEEDS A1: the first frame in the BIM (kept for the first step of the loop).
+  // Liu et al. 2022, sec. 1: the first frame in the BIM (kept for the first step of the loop).
   std::optional<PointCloud> first_frame;
   const auto t_loc = std::chrono::steady_clock::now();
   if (settings.initial_pose) {

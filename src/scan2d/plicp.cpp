@@ -117,7 +117,7 @@ void PlicpReference::build() {
 // (S + λ I) y = h, and the global minimum is the one with S + λ I positive semi-definite, i.e.
 // λ >= -σ1 (σ1 <= σ2 the eigenvalues of S). With S = V diag(σ) V^T and h' = V^T h the constraint
 // becomes the secular equation φ(λ) = h1'^2 / (σ1 + λ)^2 + h2'^2 / (σ2 + λ)^2 = 1 (multiplied
-// out it is the quartic of the paper; our root is its largest real root). φ decreases from +inf
+// out it is Censi's quartic; our root is its largest real root). φ decreases from +inf
 // to 0 on (-σ1, inf) and φ(λ) <= |h|^2 / (σ1 + λ)^2, so the root lies in (-σ1, -σ1 + |h|]; we find
 // it to machine precision by Newton steps safeguarded with bisection. If h1' = 0 (the "hard case")
 // the root may sit at λ = -σ1: then y2' = h2' / (σ2 - σ1) and y1' = ±sqrt(1 - y2'^2).
@@ -238,7 +238,7 @@ struct Candidate {
   double dist = 0.0;  ///< |point-to-line distance| at the current estimate [m]
 };
 
-/// Find, gate and trim the correspondences of `points` under T (SEEDS A3.2 steps 1-2).
+/// Find, gate and trim the correspondences of `points` under T (Liu et al. 2022, sec. 3.2, steps 1-2).
 void find_pairs(const std::vector<Vector2d>& points, const std::vector<Vector2d>& normals,
                 const PlicpReference& ref, const Pose2& T, const PlicpSettings& s,
                 std::vector<Candidate>& cands, std::vector<PointToLinePair>& pairs) {

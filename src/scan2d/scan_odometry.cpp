@@ -40,7 +40,7 @@ ScanOdometryStep ScanOdometry::add(const LaserScan& scan, const Pose2& odom_pose
     step.T_world_base = T_world_base_;
     return step;
   }
-  // Prediction from wheel odometry (SEEDS A3.3 (1)-(2)).
+  // Prediction from wheel odometry (Liu et al. 2022, sec. 3.3, loop steps (1)-(2)).
   const Pose2 odom_motion = last_odom_.ominus().oplus(odom_pose);
   last_odom_ = odom_pose;
   const Pose2 T_world_laser_guess = T_world_base_.oplus(odom_motion).oplus(l);

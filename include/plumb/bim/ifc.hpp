@@ -2,7 +2,7 @@
 #pragma once
 
 /// @file
-/// @brief An IFC model: the indexed STEP file plus its schema and units (SEEDS A1.1).
+/// @brief An IFC model: the indexed STEP file plus its schema and units (Liu et al. 2022, sec. 1.1).
 
 #include <string>
 #include <vector>

@@ -2,7 +2,7 @@
 #pragma once
 
 /// @file
-/// @brief IFC geometry to a labelled triangle mesh (SEEDS A1.1).
+/// @brief IFC geometry to a labelled triangle mesh (Liu et al. 2022, sec. 1.1).
 
 #include <array>
 #include <cstdint>

@@ -2,7 +2,8 @@
 #pragma once
 
 /// @file
-/// @brief BIM mesh -> point cloud (surface sampling) and floor-plan slices (SEEDS A1.1, paper Fig. 8).
+/// @brief BIM mesh -> point cloud (surface sampling) and floor-plan slices (Liu et al. 2022,
+///        sec. 1.1 and Fig. 8).
 
 #include <cstdint>
 #include <string>

@@ -3,11 +3,11 @@
 
 /// @file
 /// @brief Simultaneous calibration of a differential-drive robot's odometry (wheel radii, axle) and
-///        of a 2D laser's mounting pose from scan-matcher motions (SEEDS A3.1; Censi, Franchi,
+///        of a 2D laser's mounting pose from scan-matcher motions (Liu et al. 2022, sec. 3.1; Censi, Franchi,
 ///        Marchionni, Oriolo, "Simultaneous calibration of odometry and sensor parameters for
 ///        mobile robots", IEEE T-RO 2013).
 ///
-/// Model (SEEDS eq. 13-14). Over an interval of length T with constant wheel angular velocities
+/// Model (Liu et al. 2022, eq. 13-14). Over an interval of length T with constant wheel angular velocities
 /// φ_L, φ_R the robot moves by the arc
 ///   v = r_L/2 φ_L + r_R/2 φ_R,   ω = (-r_L φ_L + r_R φ_R) / b,
 ///   r = (v T sin(ωT)/(ωT),  v T (1 - cos(ωT))/(ωT),  ωT),
@@ -68,7 +68,8 @@ struct OdometryLaserParams {
 Pose2 differential_drive_motion(double radius_left, double radius_right, double axle, double T,
                                 double phi_left, double phi_right);
 
-/// @brief The laser motion the model predicts for a tuple: s = ⊖l ⊕ r(T, φ_L, φ_R) ⊕ l (SEEDS eq. 14).
+/// @brief The laser motion the model predicts for a tuple: s = ⊖l ⊕ r(T, φ_L, φ_R) ⊕ l
+///        (Liu et al. 2022, eq. 14).
 Pose2 predicted_laser_motion(const OdometryLaserParams& params, const CalibrationTuple& tuple);
 
 /// @brief Settings of calibrate_odometry_laser(). Defaults are those of Censi's published runs

@@ -3,7 +3,7 @@
 
 /// @file
 /// @brief Calibration tuples from a log: laser scans + wheel encoder readings -> (T, φ_L, φ_R, ŝ)
-///        (issue 6 item 4; the role of the synchronizer of Censi's calibration tool).
+///        (the role of the synchronizer of Censi's calibration tool).
 ///
 /// For each pair of scans (k, k + scan_spacing) the wheel angles are interpolated linearly at the
 /// two scan stamps from the encoder stream (cumulative wheel angles), giving the interval

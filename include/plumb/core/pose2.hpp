@@ -17,7 +17,7 @@ inline double wrap_angle(double a) {
   return a - kPi;
 }
 
-/// @brief An SE(2) pose or motion (x, y, theta), with the operators of SEEDS eq. 13
+/// @brief An SE(2) pose or motion (x, y, theta), with the operators of Liu et al. 2022, eq. 13
 /// (Censi et al., T-RO 2013, after Smith & Cheeseman).
 ///
 /// `a.oplus(b)` composes b expressed in a's frame onto a; `a.ominus()` is the inverse. So the robot

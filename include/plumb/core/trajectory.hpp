@@ -13,7 +13,7 @@ namespace plumb {
 /// @brief A stamped sequence of 6-DoF poses `T_world_body` (body into world).
 ///
 /// `stamps` is either empty (e.g. a KITTI pose file without a times file) or has one entry per
-/// pose [s]. Poses are double precision; see DESIGN.md for the world frame.
+/// pose [s]. Poses are double precision; see docs/design.md for the world frame.
 struct Trajectory {
   std::vector<double> stamps;              ///< [s], empty or poses.size() entries
   std::vector<Eigen::Isometry3d> poses;    ///< T_world_body

@@ -3,7 +3,7 @@
 
 /// @file
 /// @brief Trajectory error metrics with evo's semantics: association by stamp, APE, RPE, error
-///        statistics, and drift as a percentage of the distance travelled (SEEDS Table 2).
+///        statistics, and drift as a percentage of the distance travelled (Liu et al. 2022, Table 2).
 
 #include <cstddef>
 #include <utility>
@@ -89,7 +89,7 @@ ApeResult compute_ape(const Trajectory& estimate, const Trajectory& reference,
 /// @brief Which trajectory measures distance travelled (RPE pairs in metres, drift).
 enum class PathSource {
   kReference,  ///< the ground truth
-  kEstimate,   ///< the estimate itself (e.g. odometry summed frame by frame, as SEEDS does)
+  kEstimate,   ///< the estimate itself (e.g. odometry summed frame by frame, as Liu et al. 2022 do)
 };
 
 /// @brief Unit of the RPE step.
@@ -157,7 +157,7 @@ struct DriftSample {
   double drift_pct = 0.0;    ///< error / path_length * 100; NaN when path_length is 0
 };
 
-/// @brief Drift (SEEDS Table 2: |p_est - p_ref| / distance travelled so far * 100) at each index.
+/// @brief Drift (Liu et al. 2022, Table 2: |p_est - p_ref| / distance travelled so far * 100) at each index.
 /// @note The estimate is used as given: align it first if it is not in the reference's frame.
 /// @throws plumb::Error when the sizes differ, trajectories are empty or an index is out of range.
 std::vector<DriftSample> drift_at(const Trajectory& estimate, const Trajectory& reference,

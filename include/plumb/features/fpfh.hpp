@@ -2,7 +2,7 @@
 #pragma once
 
 /// @file
-/// @brief Fast Point Feature Histograms (FPFH, Rusu et al. 2009; SEEDS A1.3, eq. 1), 33 bins,
+/// @brief Fast Point Feature Histograms (FPFH, Rusu et al. 2009; Liu et al. 2022, sec. 1.2, eq. 1), 33 bins,
 ///        with Open3D's conventions so that the histograms agree with `ComputeFPFHFeature`.
 
 #include <array>
@@ -49,7 +49,7 @@ struct FpfhResult {
   std::size_t num_invalid = 0;
 };
 
-/// @brief FPFH descriptors of a cloud with normals (SEEDS eq. 1).
+/// @brief FPFH descriptors of a cloud with normals (Liu et al. 2022, eq. 1).
 ///
 /// For a point p with neighbours p_1..p_k (within `radius`, at most `max_neighbors` - 1 besides p),
 /// SPFH(p) bins the Darboux-frame pair features (α, φ, θ) of every pair (p, p_i) into three
@@ -57,7 +57,7 @@ struct FpfhResult {
 ///   FPFH(p) = SPFH(p) + N( Σ_i SPFH(p_i) / ω_i ),
 /// where, as in Open3D (and PCL), ω_i is the *squared* distance |p - p_i|², neighbours at distance
 /// 0 are left out of the sum, and N rescales each 11-bin sub-histogram of the weighted sum to 100
-/// (this replaces the paper's 1/k). So each sub-histogram of a valid signature sums to 200.
+/// (this replaces the 1/k of Liu et al. 2022, eq. 1). So each sub-histogram of a valid signature sums to 200.
 /// Pair features follow Open3D / PCL `computePairFeatures`: the source of the pair is the point
 /// whose normal makes the smaller angle with the connecting line; a pair of coincident points or
 /// one whose line is parallel to the source normal contributes the features (0, 0, 0).

@@ -2,7 +2,7 @@
 #pragma once
 
 /// @file
-/// @brief Surface normals by PCA over each point's neighbourhood (SEEDS A1.3, A2.2).
+/// @brief Surface normals by PCA over each point's neighbourhood (Liu et al. 2022, sec. 1.2 and 2.2).
 
 #include <cstddef>
 #include <limits>

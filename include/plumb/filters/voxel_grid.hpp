@@ -2,7 +2,7 @@
 #pragma once
 
 /// @file
-/// @brief Voxel-grid downsampling: one point per occupied voxel (SEEDS A1.2).
+/// @brief Voxel-grid downsampling: one point per occupied voxel (Liu et al. 2022, sec. 1.2).
 
 #include <cstddef>
 #include <cstdint>
@@ -16,7 +16,8 @@ namespace plumb {
 /// @brief What a voxel keeps.
 enum class VoxelMode {
   /// The real point nearest to the voxel's centroid, with all its fields copied unchanged
-  /// (SEEDS A1.2: the output holds real measurements only). Ties go to the lowest source index.
+  /// (Liu et al. 2022, sec. 1.2: the output holds real measurements only). Ties go to the lowest
+  /// source index.
   kNearestToCentroid,
   /// The centroid of the voxel's points (averaged in double). Normals are averaged and
   /// renormalized (if they cancel out, the nearest point's normal is used); intensities and times
@@ -27,7 +28,7 @@ enum class VoxelMode {
 /// @brief Settings of voxel_grid().
 struct VoxelGridSettings {
   double leaf_size = 0.1;                          ///< voxel edge length [m]; finite and > 0
-  VoxelMode mode = VoxelMode::kNearestToCentroid;  ///< see VoxelMode; default as in SEEDS A1.2
+  VoxelMode mode = VoxelMode::kNearestToCentroid;  ///< see VoxelMode; default as in Liu et al. 2022, sec. 1.2
   std::size_t min_points_per_voxel = 1;            ///< voxels with fewer points are dropped; >= 1
 };
 

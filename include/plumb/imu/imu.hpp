@@ -2,9 +2,10 @@
 #pragma once
 
 /// @file
-/// @brief IMU measurements, biases, noise model and gravity (SEEDS B.4, eq. 11-12).
+/// @brief IMU measurements, biases, noise model and gravity (Zhou et al. 2021, sec. 2, eq. 11-12).
 ///
-/// Measurement model (Forster et al. 2017, eq. 26-27; SEEDS B eq. 11-12), all in the IMU (body) frame:
+/// Measurement model (Forster et al. 2017, eq. 26-27; Zhou et al. 2021, eq. 11-12), all in the IMU
+/// (body) frame:
 ///   gyro  = w_body + b_g + eta_g,
 ///   accel = R_world_body^T (a_world - g_world) + b_a + eta_a,
 /// with white noises eta of the densities below and biases b driven by random walks.
@@ -48,8 +49,9 @@ struct ImuNoise {
   /// @brief The consumer MEMS defaults above.
   static ImuNoise mems() { return {}; }
 
-  /// @brief A tactical-grade IMU with 2 deg/h gyro bias instability (the test IMU of SEEDS B.4),
-  ///        the same values as the simulator's "2deg_h" preset: 0.15 deg/sqrt(h) angle random walk.
+  /// @brief A tactical-grade IMU with 2 deg/h gyro bias instability (the test IMU of Zhou et al.
+  ///        2021, sec. 4), the same values as the simulator's "2deg_h" preset: 0.15 deg/sqrt(h)
+  ///        angle random walk.
   static ImuNoise tactical_2deg_h() {
     constexpr double kDeg = 3.14159265358979323846 / 180.0;
     ImuNoise n;

@@ -2,7 +2,7 @@
 #pragma once
 
 /// @file
-/// @brief On-manifold IMU preintegration (Forster et al., T-RO 2017; SEEDS B eq. 13-18) and the
+/// @brief On-manifold IMU preintegration (Forster et al., T-RO 2017; Zhou et al. 2021, eq. 13-18) and the
 ///        IMU factor between two navigation states, with analytic Jacobians for an estimator.
 ///
 /// Conventions
@@ -11,8 +11,8 @@
 ///   `R exp(dphi)`, `p + dp`, `v + dv`, `b + db` (right perturbation on SO(3), world-frame vectors).
 /// - Preintegrated error order `[dphi, dp, dv]` (9) and `[dphi, dp, dv, dbg, dba]` (15): the same
 ///   order as the factor residual, so covariance_with_bias() is the residual's covariance.
-/// - Between samples the measurements are held constant (zero-order hold, SEEDS eq. 13-15) and the
-///   hold interval is integrated exactly: dR = exp(w dt), dv = R Gamma1(w dt) a dt,
+/// - Between samples the measurements are held constant (zero-order hold, Zhou et al. 2021,
+///   eq. 13-15) and the hold interval is integrated exactly: dR = exp(w dt), dv = R Gamma1(w dt) a dt,
 ///   dp = R Gamma2(w dt) a dt^2 with Gamma1 = J_l, Gamma2 = sum_n hat(phi)^n / (n+2)!. Forster's
 ///   scheme is the first-order truncation (Gamma1 ~ I, Gamma2 ~ I/2); the exact one makes constant-rate
 ///   motions (circles at constant speed) exact to rounding, and bias Jacobians and covariance below

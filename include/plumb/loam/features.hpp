@@ -2,8 +2,8 @@
 #pragma once
 
 /// @file
-/// @brief Cosine-angle edge / plane features on a range image (SEEDS B1.2, eq. 5), selected per
-/// ring and azimuth sector as in LOAM / LeGO-LOAM.
+/// @brief Cosine-angle edge / plane features on a range image (Zhou et al. 2021, sec. 1.2, eq. 5),
+/// selected per ring and azimuth sector as in LOAM / LeGO-LOAM.
 
 #include <cstddef>
 #include <vector>
@@ -16,7 +16,7 @@ namespace plumb {
 
 /// @brief Settings of extract_loam_features().
 struct LoamFeatureSettings {
-  /// Plane points: cos(theta_i) in [-1, plane_cos_max] (angle 170..190 deg, SEEDS B1.2).
+  /// Plane points: cos(theta_i) in [-1, plane_cos_max] (angle 170..190 deg, Zhou et al. 2021, sec. 1.2).
   double plane_cos_max = -0.984;
   /// Edge points: cos(theta_i) in [-edge_cos_abs_max, edge_cos_abs_max] (angle 80..100 deg).
   double edge_cos_abs_max = 0.174;
@@ -26,8 +26,8 @@ struct LoamFeatureSettings {
   int max_edges_per_sector = 2;                ///< edge points per ring and sector (cos nearest 0)
   int max_edge_candidates_per_sector = 2;      ///< next best edge points per ring and sector
   /// The neighbours i-1, i+1 of eq. 5 are the points `neighbor_offset` places before and after i
-  /// along the ring (1 = the paper's immediate neighbours). A larger offset widens the baseline so
-  /// that range noise does not swamp the angle on dense near-field rings.
+  /// along the ring (1 = the immediate neighbours of Zhou et al. 2021, eq. 5). A larger offset
+  /// widens the baseline so that range noise does not swamp the angle on dense near-field rings.
   int neighbor_offset = 3;
   /// A neighbour more than this many columns away from i (a gap in the ring) leaves i unscored.
   int max_neighbor_column_gap = 12;
@@ -77,7 +77,7 @@ struct LoamFeatures {
   int num_sectors = 0;  ///< sectors per ring
   /// Per ring and sector, ring-major: `sector_counts[ring * num_sectors + sector]`.
   std::vector<LoamSectorCounts> sector_counts;
-  /// Frame totals of the cos intervals (SEEDS B1.2: how structured the scene is).
+  /// Frame totals of the cos intervals (Zhou et al. 2021, sec. 1.2: how structured the scene is).
   std::size_t num_plane_interval = 0;
   std::size_t num_edge_interval = 0;
   std::size_t num_scored = 0;    ///< points with a cos value
@@ -87,7 +87,7 @@ struct LoamFeatures {
   Status status = Status::kInsufficientData;
 };
 
-/// @brief cos(theta_i) of SEEDS eq. 5 from the three points (law of cosines on the distances).
+/// @brief cos(theta_i) of Zhou et al. 2021, eq. 5, from the three points (law of cosines on the distances).
 /// @return the cosine in [-1, 1], or NaN when two of the points coincide
 inline double loam_cosine(const Vector3d& prev, const Vector3d& point, const Vector3d& next);
 

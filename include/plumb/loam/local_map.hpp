@@ -32,7 +32,7 @@ struct VoxelHashMapSettings {
   std::size_t max_age = 0;
 };
 
-/// @brief Points in a voxel hash map (SEEDS B: the local map of the tightly coupled estimator).
+/// @brief Points in a voxel hash map (the local maps of HybridLio, pipeline/hybrid_lio.hpp).
 /// @note Deterministic: points() lists voxels in the order they were first filled and each voxel's
 ///       points in insertion order. Not thread-safe for writes.
 class VoxelHashMap {

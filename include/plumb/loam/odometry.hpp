@@ -2,9 +2,9 @@
 #pragma once
 
 /// @file
-/// @brief LOAM scan matching (SEEDS B1.3, eq. 6-8): scan-to-scan against the previous frame's
+/// @brief LOAM scan matching (Zhou et al. 2021, sec. 1.3, eq. 6-8): scan-to-scan against the previous frame's
 /// features, scan-to-local-map against a feature map, and the point-to-point ICP of the hybrid
-/// switch (SEEDS B3.1, eq. 20), all solved by one small Levenberg-Marquardt loop on SE(3).
+/// switch (Zhou et al. 2021, sec. 3.1, eq. 20), all solved by one small Levenberg-Marquardt loop on SE(3).
 
 #include <cstddef>
 #include <optional>
@@ -116,8 +116,8 @@ class LoamMap {
   std::optional<KdTree3f> edge_tree_, plane_tree_;
 };
 
-/// @brief LOAM scan-to-scan (SEEDS eq. 6-8): the current frame's edge and plane points against the
-///        previous frame's edge (+candidate) and plane (+candidate) points.
+/// @brief LOAM scan-to-scan (Zhou et al. 2021, eq. 6-8): the current frame's edge and plane points
+///        against the previous frame's edge (+candidate) and plane (+candidate) points.
 ///
 /// Each round transforms the queries with the current estimate; an edge query gets its nearest
 /// previous edge point j and the nearest edge point l on another ring (eq. 6); a plane query gets
@@ -158,7 +158,7 @@ inline void loam_associate_points(const PointCloud& target, const KdTree3f& targ
                                   const Eigen::Isometry3d& T_target_cur, double max_correspondence_distance,
                                   std::vector<LoamCorrespondence>& out);
 
-/// @brief Point-to-point ICP (SEEDS eq. 20) with the same solver: each point of `cur` against its
+/// @brief Point-to-point ICP (Zhou et al. 2021, eq. 20) with the same solver: each point of `cur` against its
 ///        nearest point of `prev` within max_correspondence_distance (the hybrid switch's matcher
 ///        when a frame has too few plane points).
 /// @param prev_tree kd-tree built on prev.points

@@ -2,8 +2,9 @@
 #pragma once
 
 /// @file
-/// @brief Range image of a spinning multi-ring LiDAR frame (SEEDS B1.1, eq. 1-4): rows are laser
-/// rings, columns are azimuth bins, and every pixel keeps the index of the point it holds.
+/// @brief Range image of a spinning multi-ring LiDAR frame (Zhou et al. 2021, sec. 1.1, eq. 1-4):
+/// rows are laser rings, columns are azimuth bins, and every pixel keeps the index of the point it
+/// holds.
 
 #include <cstddef>
 #include <cstdint>
@@ -38,7 +39,8 @@ struct RangeImageSettings {
   double auto_bin_gap_deg = 0.4;
   /// Auto-binning: elevation clusters with fewer points are treated as stray points (dropped).
   std::size_t auto_bin_min_points = 16;
-  /// Azimuth resolution [deg], in [0.006, 360]: the image has ceil(360 / this) columns (paper's sensor: 0.2).
+  /// Azimuth resolution [deg], in [0.006, 360]: the image has ceil(360 / this) columns (the sensor
+  /// of Zhou et al. 2021, sec. 4: 0.2).
   double horizontal_resolution_deg = 0.2;
   double min_range = 0.5;    ///< points closer to the sensor are dropped (self hits, zeros) [m]
   double max_range = 200.0;  ///< points farther away are dropped [m]
@@ -46,7 +48,7 @@ struct RangeImageSettings {
 
 /// @brief A range image: `num_rows` rings (row 0 = lowest elevation) by `num_columns` azimuth bins.
 ///
-/// Azimuth follows SEEDS eq. 1-4: `x = l cos(alpha) sin(beta)`, `y = l cos(alpha) cos(beta)`,
+/// Azimuth follows Zhou et al. 2021, eq. 1-4: `x = l cos(alpha) sin(beta)`, `y = l cos(alpha) cos(beta)`,
 /// `z = l sin(alpha)`, so `beta = atan2(x, y)` in [0, 2 pi), measured from +y towards +x; column
 /// `c = floor(beta / resolution)`. When two points fall into one pixel the nearer one is kept.
 struct RangeImage {
@@ -78,7 +80,7 @@ struct RangeImage {
   }
 };
 
-/// @brief Sort an unordered multi-ring frame into a range image (SEEDS eq. 1-4).
+/// @brief Sort an unordered multi-ring frame into a range image (Zhou et al. 2021, eq. 1-4).
 /// @param cloud the frame in the sensor frame (origin at the optical centre)
 /// @param settings see RangeImageSettings
 /// @return the image; an empty or all-invalid frame gives Status::kInsufficientData, never a throw

@@ -2,8 +2,8 @@
 #pragma once
 
 /// @file
-/// @brief LOAM residuals (SEEDS B1.3, eq. 6-8) and the point-to-point ICP residual (eq. 20), with
-/// analytic Jacobians w.r.t. a right perturbation of the pose: `T <- T * exp(delta)`,
+/// @brief LOAM residuals (Zhou et al. 2021, sec. 1.3, eq. 6-8) and the point-to-point ICP residual
+/// (eq. 20), with analytic Jacobians w.r.t. a right perturbation of the pose: `T <- T * exp(delta)`,
 /// `delta = [rho; phi]` (translation first, as in plumb/core/lie.hpp).
 ///
 /// Every residual is a function of `q = T * p` for a query point p of the current frame; to first
@@ -32,7 +32,7 @@ inline Matrix36d transform_point_jacobian(const Eigen::Isometry3d& T, const Vect
   return J;
 }
 
-/// @brief Point-to-edge residual (SEEDS eq. 6): `r = u x (T p - a)` with u the unit direction of
+/// @brief Point-to-edge residual (Zhou et al. 2021, eq. 6): `r = u x (T p - a)` with u the unit direction of
 ///        the line through a and b. |r| is eq. 6's distance `|(q - a) x (q - b)| / |a - b|`.
 /// @param J_r_xi if not null, receives dr/d delta (3x6)
 /// @note a and b must differ; the caller checks (see make_edge_line()).
@@ -43,7 +43,7 @@ inline Vector3d point_to_edge_residual(const Eigen::Isometry3d& T, const Vector3
   return u.cross(q - a);
 }
 
-/// @brief Point-to-plane residual (SEEDS eq. 7): signed distance `r = n . (T p - a)`, n unit.
+/// @brief Point-to-plane residual (Zhou et al. 2021, eq. 7): signed distance `r = n . (T p - a)`, n unit.
 /// @param J_r_xi if not null, receives dr/d delta (1x6)
 inline double point_to_plane_residual(const Eigen::Isometry3d& T, const Vector3d& p, const Vector3d& a,
                                       const Vector3d& n, Matrix16d* J_r_xi = nullptr) {
@@ -52,7 +52,7 @@ inline double point_to_plane_residual(const Eigen::Isometry3d& T, const Vector3d
   return n.dot(q - a);
 }
 
-/// @brief Point-to-point residual (SEEDS eq. 20): `r = T p - m`.
+/// @brief Point-to-point residual (Zhou et al. 2021, eq. 20): `r = T p - m`.
 /// @param J_r_xi if not null, receives dr/d delta (3x6)
 inline Vector3d point_to_point_residual(const Eigen::Isometry3d& T, const Vector3d& p, const Vector3d& m,
                                         Matrix36d* J_r_xi = nullptr) {

@@ -4,7 +4,7 @@
 /// @file
 /// @brief The IMU factor (plumb/imu/preintegration.hpp) as residual blocks of a LeastSquaresProblem:
 ///        an IMU state is five blocks (R: SO(3), p, v, b_g, b_a: R^3), the factor is whitened by the
-///        preintegration's 15x15 covariance (SEEDS B eq. 19, E_B, with velocity and bias terms).
+///        preintegration's 15x15 covariance (Zhou et al. 2021, eq. 19, E_B, with velocity and bias terms).
 
 #include "plumb/imu/preintegration.hpp"
 #include "plumb/optim/least_squares.hpp"

@@ -6,7 +6,7 @@
 ///        right perturbation, R^n), with robust losses and analytic Jacobians from the residuals.
 ///
 /// Made for per-frame problems of a few blocks and up to thousands of small residuals (the LiDAR/IMU
-/// estimator of SEEDS B eq. 19-22): the normal equations are dense (tangent dimension up to ~100),
+/// estimator of Zhou et al. 2021, eq. 19-22): the normal equations are dense (tangent dimension up to ~100),
 /// residual rows are fixed-size Eigen types, nothing is allocated per residual evaluation.
 ///
 /// Usage:

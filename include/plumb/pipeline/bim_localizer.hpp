@@ -2,12 +2,13 @@
 #pragma once
 
 /// @file
-/// @brief BimLocalizer (SEEDS A1, issue 8 item 2): where is the robot in the building, from its
+/// @brief BimLocalizer (Liu et al. 2022, sec. 1): where is the robot in the building, from its
 ///        first LiDAR frame alone?
 ///
-/// The seed finds the frame in the BIM cloud with FPFH + SAC-IA, then the overlap-gated ICP. In an
-/// office (rooms alike, thin walls, furniture the model does not have) the FPFH matches between
-/// model and scan are mostly wrong and SAC-IA found none of eight random starts (issue 8 notes).
+/// Liu et al. 2022 (sec. 1.2-1.3) find the frame in the BIM cloud with FPFH + SAC-IA, then the
+/// overlap-gated ICP. In an office (rooms alike, thin walls, furniture the model does not have) the
+/// FPFH matches between model and scan are mostly wrong: on the demo office SAC-IA found none of
+/// eight random starts.
 /// A ground robot stands on a floor with its base level, so the unknowns that matter are
 /// (storey, x, y, heading). BimLocalizer therefore:
 ///  1. per walkable storey, builds a likelihood grid of the model's vertical faces between
@@ -15,8 +16,8 @@
 ///     positions (CorrelativeMap2D);
 ///  2. projects the frame's points in the same height band (in the base frame) to 2D and searches
 ///     every storey, heading and free position exhaustively by branch and bound;
-///  3. refines the best pose in 3D against the BIM cloud with the seed's overlap-gated ICP
-///     (refine_localization());
+///  3. refines the best pose in 3D against the BIM cloud with the overlap-gated ICP of Liu et al.
+///     2022, sec. 1.3 (refine_localization());
 ///  4. gates: a score too low (the frame is not from this building), a second place scoring
 ///     almost as well (ambiguous: give a start hint), or an ICP that fails or moves far.
 
@@ -44,8 +45,8 @@ inline CorrelativeMapSettings default_localizer_map() {
   return m;
 }
 
-/// @brief Fine-stage settings of BimLocalizerSettings::fine: localize_settings_for_voxel(0.3)
-///        (ICP from 0.6 m down to 0.1 m, fine voxel 0.1 m) with up to 50 iterations per round.
+/// @brief Fine-stage settings of BimLocalizerSettings::fine: localize_settings_for_voxel(0.15)
+///        (ICP from 0.3 m down to 0.05 m, fine voxel 0.05 m) with up to 50 iterations per round.
 inline LocalizeSettings default_localizer_fine() {
   LocalizeSettings s = localize_settings_for_voxel(0.15);
   s.icp.max_iterations = 50;

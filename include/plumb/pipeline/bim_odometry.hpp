@@ -2,16 +2,17 @@
 #pragma once
 
 /// @file
-/// @brief BIM-corrected laser odometry (SEEDS A3.3, issue 8 item 3), one frame at a time.
+/// @brief BIM-corrected laser odometry (Liu et al. 2022, sec. 3.3), one frame at a time.
 ///
 /// Per frame: the LiDAR frame is cut to a planar scan in the base frame (a z band around the
-/// LiDAR's height, SEEDS A2.1); ScanOdometry matches it by PLICP against a local map, seeded by the
-/// wheel odometry; the relative motion is chained in a PoseComposer. Every `correct_every` frames the
-/// frame's ground and vertical-plane key points (SEEDS A2.4-A2.5) are placed at the composed global
-/// pose and registered to the BIM cloud by point-to-plane ICP; when the registration passes the
-/// overlap and inlier gates, its result becomes an absolute anchor whose information comes from the
-/// final correspondences (directions the key points do not constrain, e.g. along a corridor, get
-/// none), and the composer applies it as SEEDS (5) `M ← M_e · M` through its Mahalanobis gate.
+/// LiDAR's height, Liu et al. 2022, sec. 2.1); ScanOdometry matches it by PLICP against a local map,
+/// seeded by the wheel odometry; the relative motion is chained in a PoseComposer. Every
+/// `correct_every` frames the frame's ground and vertical-plane key points (Liu et al. 2022,
+/// sec. 2.2) are placed at the composed global pose and registered to the BIM cloud by
+/// point-to-plane ICP; when the registration passes the overlap and inlier gates, its result
+/// becomes an absolute anchor whose information comes from the final correspondences (directions
+/// the key points do not constrain, e.g. along a corridor, get none), and the composer applies it
+/// as `M ← M_e · M` (Liu et al. 2022, sec. 3.3, loop step (5)) through its Mahalanobis gate.
 
 #include <cstddef>
 #include <memory>
@@ -37,7 +38,7 @@ IcpSettings default_bim_correction_icp_settings();
 /// @brief Settings of BimOdometry.
 struct BimOdometrySettings {
   Eigen::Isometry3d T_base_lidar = Eigen::Isometry3d::Identity();  ///< LiDAR points into the base frame
-  // 3D -> 2D (SEEDS A2.1): the planar scan is taken in the base frame.
+  // 3D -> 2D (Liu et al. 2022, sec. 2.1): the planar scan is taken in the base frame.
   double scan_band = 0.3;            ///< half height of the z band around the LiDAR's height [m]
   double scan_angle_increment = 0.00872664625997164788;  ///< bin width [rad] (0.5°)
   double scan_range_min = 0.3;       ///< [m]
@@ -53,7 +54,7 @@ struct BimOdometrySettings {
   double wheel_tolerance_xy = 0.01;     ///< [m]
   double wheel_tolerance_theta = 0.01;  ///< [rad]
   double wheel_tolerance_ratio = 0.1;   ///< plus this fraction of the step's length (xy) or turn (θ)
-  // BIM correction (SEEDS A3.3 step 5).
+  // BIM correction (Liu et al. 2022, sec. 3.3, loop step (5)).
   bool use_bim = true;               ///< false: plain scan-matching odometry
   std::size_t correct_every = 1;     ///< register key points every k-th frame (>= 1)
   SegmentSettings segment;           ///< ground / vertical key points

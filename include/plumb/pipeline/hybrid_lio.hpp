@@ -2,18 +2,18 @@
 #pragma once
 
 /// @file
-/// @brief LiDAR/IMU tightly coupled hybrid odometry (SEEDS B, eq. 19-22): per frame, IMU deskew,
+/// @brief LiDAR/IMU tightly coupled hybrid odometry (Zhou et al. 2021, eq. 19-22): per frame, IMU deskew,
 ///        cosine features, and one Gauss-Newton / Levenberg-Marquardt problem over the IMU states
 ///        (R, p, v, b_g, b_a) of the previous and the current frame with the IMU factor (E_B), a
 ///        prior on the previous state (the marginal of the last solve), and either LOAM residuals
 ///        against a local feature map (E_L1, when the frame has enough plane points off the ground)
 ///        or ICP residuals against a local point map (E_L2).
 ///
-/// Two departures from the seed's ICP frames, both settings (the seed's form: icp_metric =
-/// kPointToPoint, icp_keep_loam = false): the pairs are point-to-distribution, and the frame keeps
-/// the LOAM residuals the map still gives (the road, a few walls) beside them. On the simulated
-/// site runs without loop closure the seed's form drifted several times more than LOAM+IMU, these
-/// defaults less (figures in bench/README.md, "Session 10").
+/// Two departures from the ICP frames of Zhou et al. 2021 (sec. 3.2), both settings (the paper's form:
+/// icp_metric = kPointToPoint, icp_keep_loam = false): the pairs are point-to-distribution, and the
+/// frame keeps the LOAM residuals the map still gives (the road, a few walls) beside them. On the
+/// simulated site runs without loop closure the paper's form drifted several times more than
+/// LOAM+IMU, these defaults less.
 ///
 /// Frames: `T_world_base` is what the caller gets; the estimator's state is the IMU frame
 /// (`T_world_imu = T_world_base * T_base_imu`). The world is z-up with gravity (0, 0, -gravity):
@@ -57,7 +57,7 @@ const char* to_string(LioMode mode);
 enum class LioFrameMode {
   kInit,        ///< first frame: the initial pose, the map is started
   kLoam,        ///< LOAM edge / plane residuals against the feature map
-  kIcp,         ///< point-to-point ICP residuals against the point map
+  kIcp,         ///< ICP residuals (see IcpMetric) against the point map
   kPrediction,  ///< no usable LiDAR residuals: IMU (or constant-velocity) prediction only
   kSkipped,     ///< frame rejected (stamp not after the previous frame's); the state is unchanged
 };
@@ -67,7 +67,7 @@ const char* to_string(LioFrameMode mode);
 
 /// @brief How the ICP frames of the hybrid mode pair a query point with the local point map.
 enum class IcpMetric {
-  /// Nearest map point, isotropic point_sigma (SEEDS eq. 20).
+  /// Nearest map point, isotropic point_sigma (Zhou et al. 2021, eq. 20).
   kPointToPoint,
   /// The mean of the icp_neighbors nearest map points, weighted by the inverse of their covariance
   /// plus point_sigma^2 (a Mahalanobis distance, as in GICP / NDT): where the map is a ring line on
@@ -87,17 +87,18 @@ struct HybridLioSettings {
   Eigen::Isometry3d T_base_lidar = Eigen::Isometry3d::Identity();  ///< LiDAR points into the base frame
   Eigen::Isometry3d T_base_imu = Eigen::Isometry3d::Identity();    ///< IMU frame into the base frame
 
-  // --- features and the hybrid switch (SEEDS B3.2)
+  // --- features and the hybrid switch (Zhou et al. 2021, sec. 3.2)
   RangeImageSettings image;       ///< range image of each (deskewed) frame
   LoamFeatureSettings features;   ///< cosine features
   /// Hybrid switch: a frame with at least this many selected plane points off the ground uses
-  /// LOAM residuals, fewer use ICP (SEEDS B3.2: 48). Ground points (the road) constrain only
+  /// LOAM residuals, fewer use ICP (Zhou et al. 2021, sec. 3.2: 48). Ground points (the road) constrain only
   /// height, roll and pitch, so they do not count as structure.
   std::size_t min_plane_points = 48;
   /// True: the switch counts the frame's plane residuals against the map whose plane is not flat
   /// (LioFrameResult::num_structure_matches: what LOAM would really use off the ground); false: it
-  /// counts the selected plane features off the ground (num_structure_planes, at most 8 per sector,
-  /// which an open site fills with road points).
+  /// counts the selected plane features off the ground (num_structure_planes, at most
+  /// LoamFeatureSettings::max_planes_per_sector per ring and sector, slots which an open site fills
+  /// with road points).
   bool switch_on_plane_matches = true;
   /// Two vertically adjacent returns below the horizon whose joining segment is flatter than this
   /// are ground (LeGO-LOAM's ground test) [deg].
@@ -105,10 +106,10 @@ struct HybridLioSettings {
   /// Returns below the sensor this close to the plane through the pair test's ground are ground
   /// too [m]; 0 = the pair test only (see classify_ground()). Road returns the pair test misses
   /// stayed among the structure (ICP queries, edges) and, as ring arcs that barely move with the
-  /// sensor, held frames back (simulated site runs: bench/README.md, "Session 10").
+  /// sensor, held frames back on the simulated site runs.
   double ground_plane_tolerance = 0.15;
 
-  // --- solver (SEEDS B eq. 21-22)
+  // --- solver (Zhou et al. 2021, eq. 21-22)
   int max_iterations = 8;                    ///< association + LM step rounds per frame, >= 1
   double max_correspondence_distance = 1.0;  ///< farther map neighbours are not used [m]
   /// Map points fitted per LOAM query, in [3, 64], and how close to the fitted plane they must all
@@ -145,7 +146,7 @@ struct HybridLioSettings {
   IcpMetric icp_metric = IcpMetric::kPointToDistribution;  ///< ICP frames' residual (see IcpMetric)
   int icp_neighbors = 8;  ///< map points per kPointToDistribution pair, in [3, 64]
   /// ICP frames keep the LOAM residuals that the map gave too (E_B + E_L1 + E_L2); false: ICP
-  /// residuals only (E_B + E_L2, SEEDS B3.2).
+  /// residuals only (E_B + E_L2, Zhou et al. 2021, eq. 21).
   bool icp_keep_loam = true;
   /// ICP frames also match their ground returns point-to-plane against the plane map (the ICP
   /// pairs come from off the ground only, so without this height, roll and pitch rest on the IMU).
@@ -165,15 +166,16 @@ struct HybridLioSettings {
   /// Undo motion distortion in the IMU modes: with the IMU, or with constant velocity over an IMU
   /// gap. kLoam never deskews (LeGO-LOAM deskews only with an IMU; a constant-velocity deskew feeds
   /// the frame's own error back into the next frame: measured on the site runs, it oscillates from
-  /// frame to frame and loses track within metres; bench/README, "Session 12").
+  /// frame to frame and loses track within metres).
   bool deskew = true;
   /// The constant-velocity model (the prediction without IMU data: kLoam, and IMU modes over an IMU
   /// gap; the deskew over an IMU gap) uses the mean body twist of the last this many frame
   /// intervals. One interval feeds a frame's own registration error straight into the next frame:
-  /// the deskew oscillates (bench/README, "Session 13": a 1 s gap at 1.4-1.5 m/s, worst error 7.2 cm
+  /// the deskew oscillates (simulated run with a 1 s IMU gap at 1.4-1.5 m/s: worst error 7.2 cm
   /// with one interval, 5.0 cm with five, 11 cm without deskew), and kLoam's prediction carries
-  /// every velocity error on (bench/README, "Session 14": site runs, seeds 1-5, end error lower on
-  /// all ten with five intervals, median 109 -> 43 m on FZK-Haus, 291 -> 76 m on duplex). >= 1.
+  /// every velocity error on (simulated site runs, noise seeds 1-5: end error lower on all ten with
+  /// five intervals than with one; median 43 m against 109 m on FZK-Haus, 76 m against 291 m on
+  /// duplex). >= 1.
   std::size_t twist_frames = 5;
 };
 
@@ -200,7 +202,7 @@ struct LioFrameResult {
   std::size_t num_structure_matches = 0; ///< hybrid: non-flat plane residuals at the first association
                                          ///< (the switch's count when switch_on_plane_matches)
   std::size_t num_edge_points = 0;       ///< edge features selected
-  std::size_t num_plane_interval = 0;    ///< points in the plane cos interval (SEEDS B1.2)
+  std::size_t num_plane_interval = 0;    ///< points in the plane cos interval (Zhou et al. 2021, sec. 1.2)
   std::size_t num_edge_interval = 0;     ///< points in the edge cos interval
   std::size_t num_correspondences = 0;   ///< matched query points (LiDAR pairs) at the last iteration
   int iterations = 0;                    ///< solver rounds

@@ -2,7 +2,7 @@
 #pragma once
 
 /// @file
-/// @brief The pose composer of the BIM-corrected odometry (SEEDS A3.3 step 5, issue 8 item 4):
+/// @brief The pose composer of the BIM-corrected odometry (Liu et al. 2022, sec. 3.3, loop step (5)):
 ///        chains the front end's relative motions and applies absolute corrections from the BIM.
 ///
 /// State: the current body pose in the world (BIM) frame, `T_world_body`, and its 6x6 covariance
@@ -17,7 +17,7 @@
 ///   `e = log(T_meas · T⁻¹)` is gated by its Mahalanobis distance `d² = eᵀ S⁻¹ e`,
 ///   `S⁻¹ = Λ − Λ (P⁻¹ + Λ)⁻¹ Λ`, against the χ² quantile for rank(Λ) degrees of freedom; an accepted
 ///   anchor moves the pose by `δ = (P⁻¹ + Λ)⁻¹ Λ e`, `T ← exp(δ) · T`, and `P ← (P⁻¹ + Λ)⁻¹`. With
-///   Λ → ∞ this is the seed's `M ← M_e · M` with `M_e = T_meas · T⁻¹`.
+///   Λ → ∞ this is the `M ← M_e · M` of Liu et al. 2022, sec. 3.3, with `M_e = T_meas · T⁻¹`.
 /// - After `max_consecutive_rejections` rejected anchors in a row the composer assumes its own
 ///   covariance is too small (e.g. wheel slip the motion model did not foresee), inflates P by the
 ///   last innovation and accepts the next anchor that passes the inflated gate.
@@ -83,7 +83,8 @@ class PoseComposer {
   /// @throws plumb::Error for non-finite input or a Λ that is not symmetric PSD
   AnchorResult add_anchor(const Eigen::Isometry3d& T_world_body_measured, const Matrix6d& information);
 
-  /// @brief The seed's form: the correction M_e (T_meas = M_e · T) with information Λ.
+  /// @brief The form of Liu et al. 2022, sec. 3.3: the correction M_e (T_meas = M_e · T) with
+  ///        information Λ.
   AnchorResult add_correction(const Eigen::Isometry3d& M_e, const Matrix6d& information) {
     return add_anchor(M_e * pose_, information);
   }

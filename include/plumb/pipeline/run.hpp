@@ -4,8 +4,9 @@
 /// @file
 /// @brief The BIM-corrected odometry over a frame dump (what `plumb run` does): BIM cloud from the
 ///        model, initial localization of the first frame, per-frame BimOdometry with the wheel
-///        odometry as prior and for deskewing, and, when the dump has ground truth, the seed's
-///        Table 2 (error at observation points as % of the distance travelled) per method.
+///        odometry as prior and for deskewing, and, when the dump has ground truth, the error table
+///        of Liu et al. 2022, Table 2 (error at observation points as % of the distance travelled)
+///        per method.
 
 #include <functional>
 #include <optional>
@@ -28,7 +29,7 @@ struct RunSettings {
   BimOdometrySettings odometry;     ///< T_base_lidar is taken from the dump's meta.json
   double bim_spacing = 0.05;        ///< BIM cloud point spacing [m]
   /// Initial pose of the base in the BIM frame. Empty: localize the first frame in the building
-  /// (BimLocalizer: floor-plan search, then the seed's overlap-gated ICP).
+  /// (BimLocalizer: floor-plan search, then the overlap-gated ICP of Liu et al. 2022, sec. 1.3).
   std::optional<Eigen::Isometry3d> initial_pose;
   BimLocalizerSettings localizer;   ///< initial localization
   /// Rough start position of the base in the BIM frame (x, y; z ignored), e.g. the room the robot
@@ -40,7 +41,7 @@ struct RunSettings {
   std::function<void(std::size_t done, std::size_t total)> progress;  ///< called after each frame
 };
 
-/// @brief One row of the seed's Table 2.
+/// @brief One row of Liu et al. 2022, Table 2.
 struct ObservationRow {
   std::string name;           ///< "P1", "P2", "end"
   std::size_t frame = 0;

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 /// @file
-/// @brief Horn's closed-form absolute orientation with unit quaternions (SEEDS A1.6, eq. 5-6).
+/// @brief Horn's closed-form absolute orientation with unit quaternions (Liu et al. 2022, sec. 1.3, eq. 5-6).
 
 #include <cmath>
 #include <cstddef>
@@ -92,7 +92,7 @@ inline HornResult HornAccumulator::solve() const {
   const Eigen::Vector4d v = es.eigenvectors().col(3);
   const Eigen::Quaterniond q(v(0), v(1), v(2), v(3));
   const Matrix3d R = q.normalized().toRotationMatrix();
-  const Vector3d t = (q0_ + mu_q) - R * (p0_ + mu_p);  // SEEDS eq. 6: q_T = u_q - R u_p
+  const Vector3d t = (q0_ + mu_q) - R * (p0_ + mu_p);  // Liu et al. 2022, eq. 6: q_T = u_q - R u_p
   out.T_target_source.linear() = R;
   out.T_target_source.translation() = t;
   // Residual sum: var_p + var_q - 2 tr(R S^T)... = var_p + var_q - 2 * lambda_max.

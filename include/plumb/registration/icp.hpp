@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 /// @file
-/// @brief Overlap-gated conditional-loop ICP (SEEDS A1.6), point-to-point (Horn) or point-to-plane.
+/// @brief Overlap-gated conditional-loop ICP (Liu et al. 2022, sec. 1.3), point-to-point (Horn) or
+///        point-to-plane.
 
 #include <cstddef>
 #include <cstdint>
@@ -18,7 +19,7 @@ namespace plumb {
 
 /// @brief Error metric of align_icp().
 enum class IcpMethod {
-  kPointToPoint,  ///< SEEDS eq. 3/7, solved in closed form by Horn's quaternion method (eq. 5-6)
+  kPointToPoint,  ///< Liu et al. 2022, eq. 3/7, solved in closed form by Horn's quaternion method (eq. 5-6)
   kPointToPlane,  ///< (n_q . (T p - q))^2, one linearised Gauss-Newton step per iteration; needs target normals
 };
 
@@ -31,14 +32,15 @@ struct IcpSettings {
   int max_rounds = 10;                          ///< most rounds (runs of steps 1-3 at one d), >= 1
   int max_iterations = 50;                      ///< N_max: iterations per round, >= 1
   /// tau: a round stops when the mean squared residual changes by less than this between two
-  /// iterations, |d_k - d_{k+1}| < tau [m^2] (the seed's criterion, with |.| so that a growing
-  /// error does not count as convergence)
+  /// iterations, |d_k - d_{k+1}| < tau [m^2] (the criterion of Liu et al. 2022, sec. 1.3, with |.|
+  /// so that a growing error does not count as convergence)
   double tolerance = 1e-7;
   double min_step = 1e-6;                 ///< a round also stops when an update moves less than this [m] / [rad]
   double min_overlap = 0.9;               ///< c: accepted when the overlap ratio is >= c, in [0, 1]
-  double overlap_distance = 0.1;          ///< beta of the overlap ratio (SEEDS A1.5) [m]
-  /// Pairs whose normals differ by more than this are rejected (SEEDS A1.6 step 2) [rad]; used only
-  /// when both clouds have normals; the sign of a normal is ignored (scans and models orient differently).
+  double overlap_distance = 0.1;          ///< beta of the overlap ratio (Liu et al. 2022, sec. 1.3) [m]
+  /// Pairs whose normals differ by more than this are rejected (Liu et al. 2022, sec. 1.3, ICP step
+  /// (2)) [rad]; used only when both clouds have normals; the sign of a normal is ignored (scans and
+  /// models orient differently).
   double max_normal_angle = 0.785398163397448;  // 45 deg
   RobustKernel kernel = RobustKernel::kNone;    ///< IRLS weights on the residuals
   double kernel_scale = 0.05;                   ///< scale of the robust kernel [m]
@@ -79,7 +81,7 @@ struct IcpResult {
   std::vector<IcpCorrespondence> correspondences;
 };
 
-/// @brief Align `source` to `target` from `T_init` (SEEDS A1.6): nearest neighbours within d,
+/// @brief Align `source` to `target` from `T_init` (Liu et al. 2022, sec. 1.3): nearest neighbours within d,
 ///        normal-angle rejection, closed-form/linearised solve until |d_k - d_{k+1}| < tau or
 ///        N_max; then the overlap ratio; if it is below c, shrink d by Δd and run again.
 /// @param target_tree kd-tree built on `target.points`

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 /// @file
-/// @brief Robust kernels: the Huber penalty of SAC-IA (SEEDS eq. 2) and IRLS weights for ICP.
+/// @brief Robust kernels: the Huber penalty of SAC-IA (Liu et al. 2022, eq. 2) and IRLS weights for ICP.
 
 #include <cmath>
 
@@ -15,7 +15,7 @@ enum class RobustKernel {
   kTukey,   ///< biweight: zero weight beyond the scale
 };
 
-/// @brief Huber penalty of SEEDS eq. 2: `l^2/2` if `|l| < m1`, else `m1 (2|l| - m1) / 2`.
+/// @brief Huber penalty of Liu et al. 2022, eq. 2: `l^2/2` if `|l| < m1`, else `m1 (2|l| - m1) / 2`.
 /// @param l residual (a distance) [m]; @param m1 threshold [m], > 0
 inline double huber_penalty(double l, double m1) {
   const double a = std::abs(l);

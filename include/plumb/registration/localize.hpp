@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 /// @file
-/// @brief The whole SEEDS A1 chain in one call: voxel grid -> normals -> FPFH -> SAC-IA (Huber)
-///        -> overlap-gated ICP. Finds a LiDAR frame in the BIM cloud without an initial guess.
+/// @brief The whole initial localization of Liu et al. 2022 (sec. 1) in one call: voxel grid ->
+///        normals -> FPFH -> SAC-IA (Huber) -> overlap-gated ICP. Finds a LiDAR frame in the BIM
+///        cloud without an initial guess.
 
 #include <cmath>
 #include <cstddef>
@@ -46,8 +47,8 @@ struct LocalizeSettings {
   /// FPFH on the visible side only (FpfhSettings::visible_side_tolerance = factor * voxel_size) for
   /// both clouds, so that a model sampled on every face (both faces of a thin wall, the rooms behind
   /// it) is described as a scan from inside sees it; negative (default) = plain FPFH.
-  /// @note Not on by default: on the demo office it did not yet turn failed localizations into
-  ///       good ones (issue 8 notes); descriptors of a model with hidden faces are much closer to a
+  /// @note Not on by default: on the demo office it does not turn failed localizations into good
+  ///       ones; descriptors of a model with hidden faces are much closer to a
   ///       scan's with it (tests/features/fpfh_visible_side_test.cpp).
   double fpfh_visible_side_factor = -1.0;
   /// A target with normals is voxelised per normal direction (six signed axes), so that the two
@@ -148,13 +149,14 @@ LocalizeTarget prepare_localize_target(const PointCloud& target, const LocalizeS
 IcpResult refine_localization(const PointCloud& source, const LocalizeTarget& target,
                               const Eigen::Isometry3d& T_target_source, const LocalizeSettings& settings = {});
 
-/// @brief SEEDS A1 in one call against a prepared target; `source` is e.g. the first LiDAR frame.
+/// @brief Liu et al. 2022, sec. 1, in one call against a prepared target; `source` is e.g. the
+///        first LiDAR frame.
 /// @note Deterministic for a given settings.sac_ia.seed. Empty / tiny / collinear sources return
 ///       a status (kInsufficientData, kDegenerate...), never throw.
 LocalizeResult localize_coarse_to_fine(const PointCloud& source, const LocalizeTarget& target,
                                        const LocalizeSettings& settings = {});
 
-/// @brief SEEDS A1 in one call: prepares the target, then localises the source in it.
+/// @brief Liu et al. 2022, sec. 1, in one call: prepares the target, then localises the source in it.
 LocalizeResult localize_coarse_to_fine(const PointCloud& source, const PointCloud& target,
                                        const LocalizeSettings& settings = {});
 

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 /// @file
-/// @brief SAC-IA coarse registration with the Huber score (SEEDS A1.4, eq. 2; Rusu et al. 2009).
+/// @brief SAC-IA coarse registration with the Huber score (Liu et al. 2022, sec. 1.2, eq. 2;
+///        Rusu et al. 2009).
 
 #include <cstddef>
 #include <cstdint>
@@ -19,7 +20,8 @@ namespace plumb {
 /// @brief Settings of align_sac_ia(). Lengths suit indoor scans voxelised to ~0.1-0.3 m; scale
 ///        them with the voxel size (localize_coarse_to_fine() does).
 struct SacIaSettings {
-  std::size_t num_samples = 3;          ///< points per hypothesis (SEEDS A1.4a), >= 3
+  /// Points per hypothesis (Liu et al. 2022, sec. 1.2, SAC-IA step 1), >= 3.
+  std::size_t num_samples = 3;
   double min_sample_distance = 1.0;     ///< d: samples are pairwise farther apart than this [m]
   std::size_t k_correspondences = 5;    ///< a sample's match is drawn among its k most similar target FPFH, >= 1
   /// How a sample's match is drawn among its k candidates. Off: uniformly (Rusu et al. 2009).
@@ -29,7 +31,7 @@ struct SacIaSettings {
   /// draw stays random among the k, so a wrong closest match does not lock the search.
   bool similarity_weighted = true;
   int max_iterations = 20000;           ///< hypotheses drawn at most, >= 1
-  double huber_threshold = 0.3;         ///< m1 of the Huber penalty (SEEDS eq. 2) [m]
+  double huber_threshold = 0.3;         ///< m1 of the Huber penalty (Liu et al. 2022, eq. 2) [m]
   /// m1 is also the largest residual a sample pair may keep under its own hypothesis (a cheap
   /// check before scoring). Nearest distances are truncated at max_correspondence_distance in the
   /// score (a point without a target neighbour this close costs H(max_correspondence_distance)) [m];
@@ -78,14 +80,15 @@ struct SacIaResult {
   std::size_t num_inliers = 0;  ///< source points within huber_threshold of the target under the result
   double overlap = 0.0;         ///< num_inliers / finite source points, [0, 1]
   double rmse = 0.0;            ///< RMS nearest distance of the inliers [m]
-  double score = 0.0;           ///< sum of Huber penalties (SEEDS eq. 2) of the best hypothesis
+  double score = 0.0;           ///< sum of Huber penalties (Liu et al. 2022, eq. 2) of the best hypothesis
 };
 
-/// @brief SAC-IA (SEEDS A1.4): draw samples farther apart than d, give each a random one of its k
-///        most similar target features, solve the transform in closed form (Horn), score it by the
-///        Huber penalty of every transformed source point's nearest-target distance, keep the best.
+/// @brief SAC-IA (Liu et al. 2022, sec. 1.2): draw samples farther apart than d, give each a random
+///        one of its k most similar target features, solve the transform in closed form (Horn),
+///        score it by the Huber penalty of every transformed source point's nearest-target
+///        distance, keep the best.
 ///
-/// What makes it fast, without changing the seed's sampling or scoring:
+/// What makes it fast, without changing the sampling or scoring of Liu et al. 2022:
 /// - feature neighbours come from an exact kd-tree over the target signatures and are computed
 ///   only for source points that get sampled (then cached), optionally mutually filtered;
 /// - cheap pre-rejection: edge-length similarity of the sampled polygon, then every sample pair

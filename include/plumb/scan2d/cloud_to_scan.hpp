@@ -3,7 +3,7 @@
 
 /// @file
 /// @brief 3D cloud -> planar LaserScan, with the semantics of ROS `pointcloud_to_laserscan`
-///        (SEEDS A2.1): a height band, angular bins, the nearest range per bin.
+///        (Liu et al. 2022, sec. 2.1): a height band, angular bins, the nearest range per bin.
 
 #include <cmath>
 #include <cstddef>

@@ -2,7 +2,7 @@
 #pragma once
 
 /// @file
-/// @brief PLICP: point-to-line ICP between planar scans (SEEDS A3.2, eq. 15-18; Censi, "An ICP
+/// @brief PLICP: point-to-line ICP between planar scans (Liu et al. 2022, sec. 3.2, eq. 15-18; Censi, "An ICP
 ///        variant using a point-to-line metric", ICRA 2008).
 ///
 /// Frames: the *reference* frame is the laser frame of the reference scan (or of a local map);
@@ -143,7 +143,7 @@ struct PlicpResult {
 
 /// @brief Match `current` against `reference`, starting from `T_ref_cur_guess`.
 ///
-/// Each round (SEEDS A3.2): transform the current points with the estimate (eq. 16); pair each
+/// Each round (Liu et al. 2022, sec. 3.2): transform the current points with the estimate (eq. 16); pair each
 /// with the nearest reference point j1 within the distance gate and, of j1's two scan neighbours,
 /// the one nearer to the point (j2); drop the worst pairs (trim fraction, adaptive gate); solve
 /// eq. 17 exactly (closed form, Lagrange multiplier on cos^2 + sin^2 = 1); stop when the change
@@ -162,7 +162,7 @@ PlicpResult plicp(const std::vector<Vector2d>& current_points, const PlicpRefere
 PlicpResult plicp(const LaserScan& current, const LaserScan& reference, const Pose2& T_ref_cur_guess,
                   const PlicpSettings& settings = {});
 
-/// @brief The laser's motion for a robot (base) motion: s = ⊖l ⊕ r ⊕ l (SEEDS A3.1), with
+/// @brief The laser's motion for a robot (base) motion: s = ⊖l ⊕ r ⊕ l (Liu et al. 2022, eq. 14), with
 ///        `T_base_laser` = l the laser's mounting pose on the robot.
 inline Pose2 laser_motion(const Pose2& base_motion, const Pose2& T_base_laser) {
   return T_base_laser.ominus().oplus(base_motion).oplus(T_base_laser);
@@ -176,7 +176,8 @@ struct PointToLinePair {
   double weight = 1.0;
 };
 
-/// @brief The exact minimiser of Σ w_i (n_i^T (R(θ) p_i + t - q_i))^2 over (t, θ) (SEEDS eq. 17).
+/// @brief The exact minimiser of Σ w_i (n_i^T (R(θ) p_i + t - q_i))^2 over (t, θ)
+///        (Liu et al. 2022, eq. 17).
 /// @return false (and leaves `T` untouched) when the pairs do not constrain the pose (fewer than
 ///         three, or a singular translation block).
 bool solve_point_to_line(const std::vector<PointToLinePair>& pairs, Pose2& T);

@@ -39,7 +39,7 @@ inline const char* to_string(ScanMatchMode m) {
 struct ScanOdometrySettings {
   PlicpSettings plicp;                  ///< per-match settings
   PlicpReferenceSettings reference;     ///< local-map neighbour links
-  Pose2 T_base_laser;                   ///< laser mounting pose on the robot (l in SEEDS A3.1)
+  Pose2 T_base_laser;                   ///< laser pose on the robot (l of Liu et al. 2022, eq. 13-14)
   std::size_t local_map_size = 1;       ///< keyframes in the local map (>= 1; 1 = last keyframe only)
   double keyframe_distance = 0.1;       ///< a scan becomes a keyframe after this translation [m] ...
   double keyframe_angle = 0.1;          ///< ... or this rotation since the last keyframe [rad]

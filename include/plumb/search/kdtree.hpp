@@ -21,7 +21,7 @@
 namespace plumb {
 
 /// @brief Where a KdTree node is cut along its widest dimension.
-/// On the benchmark clouds (bench/README.md) kMean builds a shallower tree (LiDAR density falls
+/// On the benchmark clouds kMean builds a shallower tree (LiDAR density falls
 /// with range) and answers kNN/NN queries faster than kMidpoint.
 enum class KdTreeSplit {
   kMean,      ///< mean coordinate of the node's points (balanced on uneven density)

@@ -3,8 +3,9 @@
 
 /// @file
 /// @brief The reduced copy of a frame on which plumb's segmentation estimates normals and runs
-///        RANSAC: a voxel-grid sample with PCA normals (SEEDS A2.2 steps 1-2). Full-resolution
-///        points are labelled afterwards by their distance to the planes found on the sample.
+///        RANSAC: a voxel-grid sample with PCA normals (Liu et al. 2022, sec. 2.2, ground steps
+///        (1)-(2)). Full-resolution points are labelled afterwards by their distance to the planes
+///        found on the sample.
 
 #include <cmath>
 #include <cstddef>
@@ -37,9 +38,9 @@ enum class FrameNormals {
 /// @brief How a frame is reduced before normals are estimated.
 struct FrameSampleSettings {
   /// Voxel edge of the sample [m], > 0. Each voxel keeps its real point nearest to the centroid
-  /// (which also filters noise: one point per voxel, SEEDS A2.4 step 1). 0.3 m keeps walls and
-  /// floors of a room dense enough for 8-neighbour normals while a 32-line frame shrinks ~14x
-  /// (the normals of the sample are most of segment_frame()'s cost).
+  /// (which also filters noise: one point per voxel, Liu et al. 2022, sec. 2.2, ground step (1)).
+  /// 0.3 m keeps walls and floors of a room dense enough for 8-neighbour normals while a 32-line
+  /// frame shrinks ~14x (the normals of the sample are most of segment_frame()'s cost).
   double voxel_size = 0.3;
   FrameNormals normals = FrameNormals::kVoxelBlock;  ///< neighbourhood of a normal, see FrameNormals
   /// Neighbours per normal at most (the point included), >= 3.

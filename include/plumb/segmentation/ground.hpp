@@ -2,10 +2,10 @@
 #pragma once
 
 /// @file
-/// @brief Ground plane of a LiDAR frame (SEEDS A2.4): noise filter + normals on a voxel sample,
-///        pre-segmentation by the normal's angle to z (eq. 8) and the projection length l (eq. 9)
-///        around the expected ground distance l0, constrained RANSAC (eq. 10-11), and the
-///        full-resolution ground points by distance to the plane.
+/// @brief Ground plane of a LiDAR frame (Liu et al. 2022, sec. 2.2): noise filter + normals on a
+///        voxel sample, pre-segmentation by the normal's angle to z (eq. 8) and the projection
+///        length l (eq. 9) around the expected ground distance l0, constrained RANSAC (eq. 10-11),
+///        and the full-resolution ground points by distance to the plane.
 
 #include <cstddef>
 #include <cstdint>

@@ -2,8 +2,8 @@
 #pragma once
 
 /// @file
-/// @brief Plane model and RANSAC plane fitting with an optional axis constraint (SEEDS A2.3,
-///        eq. 10-11): deterministic from a seed, early stop by confidence, least-squares refit.
+/// @brief Plane model and RANSAC plane fitting with an optional axis constraint (Liu et al. 2022,
+///        sec. 2.2, eq. 10-11): deterministic from a seed, early stop by confidence, least-squares refit.
 
 #include <cstddef>
 #include <cstdint>
@@ -15,7 +15,7 @@
 namespace plumb {
 
 /// @brief Plane `A x + B y + C z = D` with `(A, B, C) = normal`, `|normal| = 1` and `D = offset`
-///        (SEEDS eq. 10).
+///        (Liu et al. 2022, eq. 10).
 struct Plane {
   Vector3d normal = Vector3d::UnitZ();  ///< unit normal (A, B, C)
   double offset = 0.0;                  ///< D [m]; |D| is the plane's distance from the origin
@@ -75,7 +75,7 @@ struct PlaneRansacResult {
   double rmse = 0.0;            ///< RMS point-to-plane distance of the inliers [m]
 };
 
-/// @brief RANSAC plane among `candidates` (SEEDS eq. 10-11): draw 3 distinct candidates (or one
+/// @brief RANSAC plane among `candidates` (Liu et al. 2022, eq. 10-11): draw 3 distinct candidates (or one
 ///        with its normal, see PlaneSampling), reject collinear samples and samples that violate the axis constraint, score by inlier count
 ///        (|n.p - D| < τ, and normal agreement when `normals` is given), keep the best
 ///        (first best on ties), stop early by confidence, then refit by least squares.

@@ -2,9 +2,9 @@
 #pragma once
 
 /// @file
-/// @brief Normal / projection pre-segmentation (SEEDS A2.2, eq. 8, 9 and 12): per-point angles of
-///        the normal to an axis and projection lengths, and the candidate selection by thresholds
-///        that shrinks the point set a plane RANSAC has to search.
+/// @brief Normal / projection pre-segmentation (Liu et al. 2022, sec. 2.2, eq. 8, 9 and 12):
+///        per-point angles of the normal to an axis and projection lengths, and the candidate
+///        selection by thresholds that shrinks the point set a plane RANSAC has to search.
 
 #include <algorithm>
 #include <cmath>
@@ -17,7 +17,7 @@
 
 namespace plumb {
 
-/// @brief Angle between a normal and an axis, `theta = arccos(n.k / (|n||k|))` (SEEDS eq. 8).
+/// @brief Angle between a normal and an axis, `theta = arccos(n.k / (|n||k|))` (Liu et al. 2022, eq. 8).
 /// @return the angle in [0, pi] [rad]; NaN when either vector is zero or not finite.
 /// @note Signed: with normals oriented toward the sensor, a floor below it gives ~0 to +z and a
 ///       ceiling ~pi.
@@ -79,7 +79,7 @@ inline double normal_axis_angle(const Vector3f& n, const Vector3d& axis) {
   return std::acos(detail::normal_axis_cos(n, axis));
 }
 
-/// @brief Projection length of a point onto its own normal, `l = |n . Oq| / |n|` (SEEDS eq. 9):
+/// @brief Projection length of a point onto its own normal, `l = |n . Oq| / |n|` (Liu et al. 2022, eq. 9):
 ///        the distance from the sensor origin O of the plane through q with normal n.
 /// @return l >= 0 [m]; NaN when n is zero or not finite.
 inline double projection_length(const Vector3f& q, const Vector3f& n) {
@@ -89,7 +89,7 @@ inline double projection_length(const Vector3f& q, const Vector3f& n) {
   return std::abs(nd.dot(q.cast<double>())) / len;
 }
 
-/// @brief Vertical-plane indicator of SEEDS eq. 12: `u1 = n x i`, `u2 = n x j`; the angle between
+/// @brief Vertical-plane indicator of Liu et al. 2022, eq. 12: `u1 = n x i`, `u2 = n x j`; the angle between
 ///        u and the z axis, which is ~0 when n is horizontal (the point lies on a vertical plane).
 /// @return the angle between the line of u and z, in [0, pi/2] [rad]; NaN for a zero/NaN normal.
 /// @note The paper takes u1 unless it is zero; here the longer of u1, u2 is taken, which is the
@@ -116,7 +116,7 @@ struct PresegmentSettings {
 };
 
 /// @brief Indices of the points whose normal passes the angle window and whose projection length
-///        (eq. 9) passes the length window (SEEDS A2.2 step 3).
+///        (eq. 9) passes the length window (Liu et al. 2022, sec. 2.2, ground step (3)).
 /// @param points  points in the sensor frame (origin = sensor) [m]
 /// @param normals one normal per point (NaN normals are never candidates)
 /// @return ascending indices into `points`

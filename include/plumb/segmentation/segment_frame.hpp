@@ -3,7 +3,7 @@
 
 /// @file
 /// @brief One call per LiDAR frame: ground, vertical-plane key points and "decoration"
-///        (SEEDS A2.2-A2.5): segment_frame().
+///        (Liu et al. 2022, sec. 2.2): segment_frame().
 
 #include <chrono>
 #include <cstddef>
@@ -18,7 +18,8 @@
 
 namespace plumb {
 
-/// @brief Label of a point that is neither ground nor on a vertical plane ("decoration", SEEDS A2.5).
+/// @brief Label of a point that is neither ground nor on a vertical plane ("decoration",
+///        Liu et al. 2022, sec. 2.2).
 constexpr std::int32_t kSegmentOther = 0;
 /// @brief Label of a ground point.
 constexpr std::int32_t kSegmentGround = 1;

@@ -2,8 +2,8 @@
 #pragma once
 
 /// @file
-/// @brief Vertical-plane key points (SEEDS A2.5, eq. 12): pre-segmentation by the angle between
-///        u = n x i (or n x j) and z, repeated RANSAC for planes parallel to z, a minimum plane
+/// @brief Vertical-plane key points (Liu et al. 2022, sec. 2.2, eq. 12): pre-segmentation by the
+///        angle between u = n x i (or n x j) and z, repeated RANSAC for planes parallel to z, a minimum plane
 ///        size, and the full-resolution points of each plane.
 
 #include <cstddef>
@@ -59,7 +59,7 @@ struct VerticalPlanesResult {
   double seconds = 0.0;            ///< wall time [s]
 };
 
-/// @brief Vertical planes of `cloud` from its sample (SEEDS A2.5).
+/// @brief Vertical planes of `cloud` from its sample (Liu et al. 2022, eq. 12).
 ///
 /// Candidates: sample points with a normal whose eq. 12 angle is <= Δθ1 and that are not ground
 /// sample inliers. Repeatedly: a RANSAC plane parallel to z (within Δθ1) with normal agreement,

@@ -35,7 +35,7 @@ struct WheelSettings {
 std::vector<WheelEncoderReading> simulate_wheels(const RobotTrajectory& trajectory, const WheelSettings& settings = {});
 
 /// @brief Dead reckoning from encoder readings: per interval, left/right arc lengths r * dphi,
-///        then the constant-curvature motion (ds, dtheta) composed with ⊕ (SEEDS eq. 13).
+///        then the constant-curvature motion (ds, dtheta) composed with ⊕ (Liu et al. 2022, eq. 13).
 /// @param start pose of the first reading (identity = the odometry frame starts at the base).
 /// @throws plumb::Error on non-positive parameters or non-increasing stamps.
 std::vector<io::OdomSample> integrate_wheel_odometry(const std::vector<WheelEncoderReading>& wheels,

@@ -231,7 +231,7 @@ inline FpfhResult compute_fpfh(const PointCloud& cloud, const FpfhSettings& sett
     }
   }
 
-  // FPFH (SEEDS eq. 1 with Open3D's weighting and normalisation, see the header).
+  // FPFH (Liu et al. 2022, eq. 1, with Open3D's weighting and normalisation, see the header).
   for (std::size_t f = 0; f < out.indices.size(); ++f) {
     const std::size_t p = out.indices[f];
     const std::uint32_t r = usable[p] ? row_of[p] : kNoRow;

@@ -131,7 +131,8 @@ inline void ImuPreintegration::add_measurement(const Vector3d& gyro, const Vecto
   A.block<3, 3>(6, 9) = -RM1 * dt2;
   A.block<3, 3>(6, 12) = -RG1 * dt;
 
-  // White noise of one held sample: covariance density^2 / dt (SEEDS eq. 11-12, Forster eq. 62).
+  // White noise of one held sample: covariance density^2 / dt (Zhou et al. 2021, eq. 11-12;
+  // Forster et al. 2017, eq. 62).
   const ImuNoise& n = settings_.noise;
   const double q_g = n.gyro_noise_density * n.gyro_noise_density / dt;
   const double q_a = n.accel_noise_density * n.accel_noise_density / dt;
@@ -154,7 +155,7 @@ inline void ImuPreintegration::add_measurement(const Vector3d& gyro, const Vecto
   J_v_bg_ -= R_hat_G1a * dt * J_R_bg_ + RM1 * dt2;
   J_R_bg_ = E.transpose() * J_R_bg_ - Jr * dt;
 
-  // Means (SEEDS eq. 16-18 with the exact hold integrals).
+  // Means (Zhou et al. 2021, eq. 16-18, with the exact hold integrals).
   delta_p_ += delta_v_ * dt + R * G2a * dt2;
   delta_v_ += R * G1a * dt;
   delta_R_ = delta_R_ * E;

@@ -13,7 +13,7 @@
 namespace plumb {
 
 inline double loam_cosine(const Vector3d& prev, const Vector3d& point, const Vector3d& next) {
-  // SEEDS eq. 5: cos = (d_{i-1,i}^2 + d_{i,i+1}^2 - d_{i-1,i+1}^2) / (2 d_{i-1,i} d_{i,i+1})
+  // Zhou et al. 2021, eq. 5: cos = (d_{i-1,i}^2 + d_{i,i+1}^2 - d_{i-1,i+1}^2) / (2 d_{i-1,i} d_{i,i+1})
   const double a_sq = (point - prev).squaredNorm();
   const double b_sq = (next - point).squaredNorm();
   const double c_sq = (next - prev).squaredNorm();
@@ -134,7 +134,7 @@ inline LoamFeatures extract_loam_features(const PointCloud& cloud, const RangeIm
         ++f.num_parallel;
       }
     }
-    // SEEDS eq. 5 on the points k places before and after.
+    // Zhou et al. 2021, eq. 5, on the points k places before and after.
     int plane_pool_count = 0;
     for (int s = k; s + k < n; ++s) {
       if (!usable[U(s)]) continue;

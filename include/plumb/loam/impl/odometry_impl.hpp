@@ -261,7 +261,7 @@ inline LoamResult loam_scan_to_scan(const LoamFeatures& prev, const LoamFeatures
       for (const Vector3f& p : cur.edges.points) {
         if (!p.allFinite()) continue;
         const Vector3f q = R * p + t;
-        const auto j = edges.tree->nearest(q, max_sq);  // SEEDS eq. 6: nearest edge point j
+        const auto j = edges.tree->nearest(q, max_sq);  // Zhou et al. 2021, eq. 6: nearest edge point j
         if (!j) continue;
         const int ring_j = edges.rings[j->index];
         const auto l = edges.nearest_other_ring(q, ring_j, window, max_sq);  // l on another ring
@@ -278,7 +278,7 @@ inline LoamResult loam_scan_to_scan(const LoamFeatures& prev, const LoamFeatures
       for (const Vector3f& p : cur.planes.points) {
         if (!p.allFinite()) continue;
         const Vector3f q = R * p + t;
-        const auto j = planes.tree->nearest(q, max_sq);  // SEEDS eq. 7: nearest plane point j
+        const auto j = planes.tree->nearest(q, max_sq);  // Zhou et al. 2021, eq. 7: nearest plane point j
         if (!j) continue;
         const int ring_j = planes.rings[j->index];
         const auto& ring_tree = planes.ring_trees[static_cast<std::size_t>(ring_j)];

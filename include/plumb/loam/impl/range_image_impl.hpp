@@ -24,7 +24,7 @@ inline double valid_range(const Vector3f& p, const RangeImageSettings& s) {
   return r;
 }
 
-// SEEDS eq. 1-4: alpha = asin(z / l).
+// Zhou et al. 2021, eq. 1-4: alpha = asin(z / l).
 inline double elevation(const Vector3f& p, double r) {
   return std::asin(std::clamp(static_cast<double>(p.z()) / r, -1.0, 1.0));
 }
@@ -137,7 +137,7 @@ inline RangeImage build_range_image(const PointCloud& cloud, const RangeImageSet
     img.point_row = auto_bin_rings(cloud, settings, num_rows);
   }
 
-  // Columns: beta = atan2(x, y) in [0, 2 pi) (SEEDS eq. 1-4).
+  // Columns: beta = atan2(x, y) in [0, 2 pi) (Zhou et al. 2021, eq. 1-4).
   const double res = settings.horizontal_resolution_deg * kDegToRad;
   const int num_columns = std::max(1, static_cast<int>(std::ceil(360.0 / settings.horizontal_resolution_deg - 1e-9)));
   img.num_rows = num_rows;

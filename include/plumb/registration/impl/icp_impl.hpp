@@ -64,7 +64,7 @@ inline void check_icp_settings(const IcpSettings& s) {
 class IcpNnCache {
  public:
   /// Neighbours kept per point. Larger K answers more moves without a query but makes each
-  /// query and each check dearer; 8 was fastest on the room_scan1 benchmark (bench/README.md),
+  /// query and each check dearer; 8 was fastest on the room_scan1 benchmark,
   /// whose target holds every point twice (so 8 is 4 distinct positions there).
   static constexpr std::size_t kK = 8;
 
@@ -136,8 +136,8 @@ inline float cached_nearest(const PointCloud& target, const KdTree3f& tree, cons
   return knn_d[0];
 }
 
-/// Nearest-neighbour pairs of the source under T within distance d (SEEDS A1.6 steps 1-2), through
-/// `cache` (cached_nearest). Returns the mean squared residual of the metric.
+/// Nearest-neighbour pairs of the source under T within distance d (Liu et al. 2022, sec. 1.3, ICP
+/// steps (1)-(2)), through `cache` (cached_nearest). Returns the mean squared residual of the metric.
 inline double icp_pairs(const PointCloud& source, const PointCloud& target, const KdTree3f& tree,
                         const Eigen::Isometry3d& T, double d, const IcpSettings& s,
                         std::vector<IcpPair>& pairs, IcpNnCache& cache) {
@@ -241,7 +241,7 @@ inline double icp_degeneracy(const std::vector<IcpPair>& pairs, bool point_to_pl
 inline bool icp_step(const std::vector<IcpPair>& pairs, const IcpSettings& s, Eigen::Isometry3d& delta) {
   const bool point_to_plane = s.method == IcpMethod::kPointToPlane;
   if (!point_to_plane) {
-    // SEEDS eq. 5-6: Horn's closed form on the (weighted) pairs.
+    // Liu et al. 2022, eq. 5-6: Horn's closed form on the (weighted) pairs.
     HornAccumulator acc;
     for (const IcpPair& pr : pairs) {
       const double w = s.kernel == RobustKernel::kNone ? 1.0 : robust_weight(s.kernel, icp_residual(pr, false), s.kernel_scale);
@@ -322,7 +322,7 @@ inline IcpResult align_icp(const PointCloud& source, const PointCloud& target, c
         failed = true;
         break;
       }
-      // SEEDS A1.6 step 3: stop when d_k - d_{k+1} < tau.
+      // Liu et al. 2022, sec. 1.3, ICP step (3): stop when d_k - d_{k+1} < tau.
       if (std::abs(prev_mse - mse) < settings.tolerance) {
         out.converged = true;
         break;
@@ -345,7 +345,8 @@ inline IcpResult align_icp(const PointCloud& source, const PointCloud& target, c
       }
     }
     if (failed) break;
-    // SEEDS A1.6 step 4: accept when the overlap ratio reaches c, else shrink d and run again.
+    // Liu et al. 2022, sec. 1.3, ICP step (4): accept when the overlap ratio reaches c, else shrink d
+    // and run again.
     out.overlap = detail::icp_overlap(source, target, target_tree, T, settings.overlap_distance, cache).overlap;
     if (out.overlap >= settings.min_overlap) {
       gate_passed = true;

@@ -61,7 +61,8 @@ inline void check_sac_ia_settings(const SacIaSettings& s) {
               "align_sac_ia: settings.prescore_slack = " << s.prescore_slack << " must be >= 0");
 }
 
-/// Feature-space candidates of SAC-IA (SEEDS A1.4b), computed on first use and cached.
+/// Feature-space candidates of SAC-IA (Liu et al. 2022, sec. 1.2, SAC-IA step 2), computed on first
+/// use and cached.
 class SacIaCandidates {
  public:
   SacIaCandidates(const std::vector<FpfhSignature>& source_features, const std::vector<std::size_t>& src_ids,
@@ -190,8 +191,8 @@ inline SacIaResult align_sac_ia(const PointCloud& source, const std::vector<Fpfh
     if (target.points[j].allFinite() && detail::fpfh_valid(target_features[j])) tgt_ids.push_back(j);
   if (src_ids.size() < s || tgt_ids.size() < 3) return out;
 
-  // SEEDS A1.4b: the k most similar target signatures, computed for a source point when it is
-  // first sampled.
+  // Liu et al. 2022, sec. 1.2, SAC-IA step 2: the k most similar target signatures, computed for a
+  // source point when it is first sampled.
   const std::size_t k = std::min(settings.k_correspondences, tgt_ids.size());
   detail::SacIaCandidates candidates(source_features, src_ids, target_features, tgt_ids, k, settings.mutual_filter,
                                      settings.similarity_weighted);
@@ -222,7 +223,7 @@ inline SacIaResult align_sac_ia(const PointCloud& source, const std::vector<Fpfh
   std::vector<std::size_t> np(s);           // and their number
   constexpr int kMaxSampleAttempts = 100;
 
-  // Huber total (SEEDS eq. 2, distances truncated at max_correspondence_distance) over
+  // Huber total (Liu et al. 2022, eq. 2, distances truncated at max_correspondence_distance) over
   // score_order[begin, end), added to `total`; stops early once total >= bound (exact: every
   // penalty is >= 0). Also counts the points within m1 (inliers) and their squared distances, so
   // that the winner's statistics need no extra pass.
@@ -281,7 +282,8 @@ inline SacIaResult align_sac_ia(const PointCloud& source, const std::vector<Fpfh
         break;
       }
     }
-    // SEEDS A1.4a: samples pairwise farther apart than d (and with at least one candidate).
+    // Liu et al. 2022, sec. 1.2, SAC-IA step 1: samples pairwise farther apart than d (and with at
+    // least one candidate).
     bool ok = true;
     for (std::size_t a = 0; a < s && ok; ++a) {
       ok = false;
@@ -300,7 +302,7 @@ inline SacIaResult align_sac_ia(const PointCloud& source, const std::vector<Fpfh
       }
     }
     if (!ok) continue;
-    // SEEDS A1.4b: one of the k most similar signatures at random.
+    // Liu et al. 2022, sec. 1.2, SAC-IA step 2: one of the k most similar signatures at random.
     for (std::size_t a = 0; a < s; ++a) {
       const std::uint32_t j = candidates.draw(sample[a], rng);
       P[a] = source.points[src_ids[sample[a]]].cast<double>();
@@ -317,7 +319,7 @@ inline SacIaResult align_sac_ia(const PointCloud& source, const std::vector<Fpfh
       }
     }
     if (!similar) continue;
-    // SEEDS A1.4c: closed form, then the Huber score.
+    // Liu et al. 2022, sec. 1.2, SAC-IA step 3: closed form, then the Huber score.
     HornAccumulator acc;
     for (std::size_t a = 0; a < s; ++a) acc.add(P[a], Q[a]);
     const HornResult h = acc.solve();

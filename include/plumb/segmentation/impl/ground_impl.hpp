@@ -29,8 +29,8 @@ inline void check_ground_settings(const GroundSettings& s) {
               "extract_ground: min_sample_inliers = " << s.min_sample_inliers << " must be >= 3");
 }
 
-/// l0 of the lowest large horizontal plane among candidate projection lengths (SEEDS A2.4 with the
-/// mounting height unknown); NaN when there is no candidate.
+/// l0 of the lowest large horizontal plane among candidate projection lengths (Liu et al. 2022, sec. 2.2,
+/// with the mounting height unknown); NaN when there is no candidate.
 inline double lowest_large_plane_length(const std::vector<double>& lengths, double tolerance, double min_fraction,
                                         std::size_t min_count) {
   if (lengths.empty()) return std::numeric_limits<double>::quiet_NaN();
@@ -109,7 +109,8 @@ inline GroundResult extract_ground(const PointCloud& cloud, const FrameSample& s
     return out;
   }
 
-  // SEEDS A2.4 step 3: normal within Δθ0 of +z (eq. 8), below the sensor, l (eq. 9) near l0.
+  // Liu et al. 2022, sec. 2.2, ground step (3): normal within Δθ0 of +z (eq. 8), below the sensor,
+  // l (eq. 9) near l0.
   PresegmentSettings ps;
   ps.angle_kind = PresegmentAngle::kNormalToAxis;
   ps.axis = Vector3d::UnitZ();
@@ -144,7 +145,7 @@ inline GroundResult extract_ground(const PointCloud& cloud, const FrameSample& s
     return out;
   }
 
-  // SEEDS A2.4 step 4: RANSAC plane perpendicular to z within Δθ0 (eq. 10-11).
+  // Liu et al. 2022, sec. 2.2, ground step (4): RANSAC plane perpendicular to z within Δθ0 (eq. 10-11).
   PlaneRansacSettings rs;
   rs.distance_threshold = s.distance_threshold;
   rs.max_iterations = s.max_iterations;

@@ -81,7 +81,7 @@ inline VerticalPlanesResult extract_vertical_planes(const PointCloud& cloud, con
     return out;
   }
 
-  // SEEDS eq. 12 pre-segmentation, ground sample points removed.
+  // Liu et al. 2022, eq. 12, pre-segmentation, ground sample points removed.
   std::vector<std::uint8_t> taken(sample.points.size(), 0);
   if (use_ground) {
     for (std::size_t i : ground->sample_inliers) taken[i] = 1;
