@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Example 01: the everyday pieces of plumb on a small synthetic room scan.
 //   1. make a cloud (a 6 x 4 x 2.8 m room seen from its middle, 3 mm range noise, a few NaN returns)
-//   2. voxel-downsample it at 5 cm, keeping per voxel the real point nearest the centroid (SEEDS A1.2)
+//   2. voxel-downsample it at 5 cm, keeping per voxel the real point nearest the centroid (Liu et al. 2022, sec. 1.2)
 //   3. build a kd-tree and ask for the neighbours of a point on the floor
 //   4. write it as a binary_compressed PCD and read it back
-//   5. compose SE(2) poses with the ⊕/⊖ operators of SEEDS eq. 13
+//   5. compose SE(2) poses with the ⊕/⊖ operators of Liu et al. 2022, eq. 13
 #include <cmath>
 #include <cstdio>
 #include <limits>
