@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Synthetic tests of the odometry/laser calibration: simulated differential-drive motion with known
-// wheel radii, axle and laser pose; the laser motion is made exactly as s = ⊖l ⊕ r ⊕ l (SEEDS
-// eq. 13-14) with the robot arc r computed here from its centre of rotation.
+// wheel radii, axle and laser pose; the laser motion is made exactly as s = ⊖l ⊕ r ⊕ l (Liu et al.
+// 2022, eq. 13-14) with the robot arc r computed here from its centre of rotation.
 
 #include <cmath>
 #include <vector>
@@ -84,7 +84,7 @@ void expect_zero_result(const plumb::OdometryLaserCalibrationResult& r) {
 }
 
 TEST(DifferentialDriveTest, ArcMatchesComposedSmallSteps) {
-  // The closed-form arc equals the composition (⊕, SEEDS eq. 13) of many short straight steps.
+  // The closed-form arc equals the composition (⊕, Liu et al. 2022, eq. 13) of many short straight steps.
   for (const auto& [pl, pr] : {std::pair{0.7, 0.2}, std::pair{-0.4, 0.9}, std::pair{0.5, 0.5},
                                std::pair{0.8, -0.8}}) {
     const double T = 0.9;

@@ -285,8 +285,6 @@ TEST(TupleExtractionTest, PlicpTuplesFromSimulatedRoomCalibrate) {
   const auto est = plumb::calibrate_odometry_laser(ex.tuples);
   ASSERT_EQ(est.status, plumb::Status::kOk);
   const plumb::Vector6d err = est.params.vector() - kTruth.vector();
-  std::printf("  PLICP tuples: %zu, errors r_L %.2e r_R %.2e b %.2e l_x %.2e l_y %.2e l_th %.2e\n",
-              ex.tuples.size(), err(0), err(1), err(2), err(3), err(4), err(5));
   // Noise-free scans of straight walls: PLICP's point-to-line solution is exact up to its
   // stopping tolerance, so the whole chain recovers the parameters to ~1e-8.
   for (int j = 0; j < 6; ++j) EXPECT_LT(std::abs(err(j)), 1e-6) << "parameter " << j;

@@ -99,8 +99,6 @@ TEST_F(CalibrateLogsCliTest, RecoversSimulatedRobotFromLaserAndTickLogs) {
                                            "' --ticks-per-rev 2048 --tuples-out '" + tuples + "' --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   auto num = [&](const char* key) { return plumb::test::json_number(r.out, "", key); };
-  std::printf("  l_diam %.5f r_diam %.5f axle %.5f l_x %.4f l_y %.4f l_theta %.5f (tuples %g)\n", num("l_diam"),
-              num("r_diam"), num("axle"), num("l_x"), num("l_y"), num("l_theta"), num("tuples"));
   // 5 mm range noise, tick quantisation, 10 Hz scans: measured errors are ~0.03 % on the wheels and
   // axle, < 0.3 mm and 0.03 deg on the laser pose; the bounds leave a few times that.
   EXPECT_NEAR(num("l_diam"), 2 * kTruth.r_l, 2 * kTruth.r_l * 0.001);

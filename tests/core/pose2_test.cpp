@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Pose2's operators against SEEDS eq. 13 written out by hand, and against homogeneous matrices.
+// Pose2's operators against Liu et al. 2022, eq. 13, written out by hand, and against homogeneous matrices.
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -59,7 +59,7 @@ TEST(Pose2Test, GroupProperties) {
 }
 
 TEST(Pose2Test, RelativeMotionRecoversSecondPose) {
-  // r = ⊖q_k ⊕ q_k+1 (SEEDS A3.1), so q_k ⊕ r == q_k+1.
+  // r = ⊖q_k ⊕ q_k+1 (Liu et al. 2022, sec. 3.1), so q_k ⊕ r == q_k+1.
   Rng rng(3);
   for (int i = 0; i < 100; ++i) {
     const Pose2 qk = random_pose(rng), qk1 = random_pose(rng);

@@ -89,7 +89,6 @@ TEST(FpfhVisibleSideTest, RoomBehindTheWallMostlyLeftOut) {
   const FpfhResult scan = compute_fpfh(scene.front, plain);
   const double d_visible = front_distance(compute_fpfh(scene.all, visible), scan).first;
   const double d_plain = front_distance(compute_fpfh(scene.all, plain), scan).first;
-  std::printf("  mean L1 to the scan's descriptors: plain %.2f, visible side %.2f\n", d_plain, d_visible);
   EXPECT_LT(d_visible, 0.25 * d_plain);
 }
 

@@ -142,8 +142,6 @@ TEST(GroundTest, PlaneTakesTheRoadReturnsThePairTestMisses) {
     }
     EXPECT_EQ(added, g.num_from_plane);
     EXPECT_GE(g.num_from_plane, cg.road - cp.road_marked);
-    std::printf("[ ground   ] roll %.0f deg: %zu road returns, pair test %zu, with the plane %zu\n", roll_deg, cg.road,
-                cp.road_marked, cg.road_marked);
   }
 }
 

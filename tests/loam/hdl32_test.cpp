@@ -5,9 +5,6 @@
 // transform mapping the second scan 251371071 into the first 251370668: T_prev_cur) to 5 cm / 0.3 deg.
 #include <cmath>
 #include <fstream>
-#include <iomanip>
-#include <iostream>
-#include <sstream>
 
 #include <gtest/gtest.h>
 
@@ -41,26 +38,6 @@ RangeImageSettings hdl32_image() {
   return s;
 }
 
-void print_sector_counts(const char* name, const LoamFeatures& f) {
-  std::ostringstream os;
-  os << name << ": " << f.num_rings << " rings x " << f.num_sectors << " sectors; frame totals: scored "
-     << f.num_scored << ", plane interval " << f.num_plane_interval << ", edge interval "
-     << f.num_edge_interval << ", occluded " << f.num_occluded << ", parallel " << f.num_parallel
-     << "; selected edges " << f.edges.size() << " (+" << f.edge_candidates.size() << "), planes "
-     << f.planes.size() << " (+" << f.plane_candidates.size() << ")\n"
-     << "  per sector (ring: plane-interval/edge-interval/planes/edges per sector)\n";
-  for (int r = 0; r < f.num_rings; ++r) {
-    os << "  ring " << std::setw(2) << r << ':';
-    for (int s = 0; s < f.num_sectors; ++s) {
-      const LoamSectorCounts& c = f.sector_counts[static_cast<std::size_t>(r * f.num_sectors + s)];
-      os << "  " << std::setw(4) << c.num_plane_interval << '/' << std::setw(3) << c.num_edge_interval << '/'
-         << c.num_planes << '/' << c.num_edges;
-    }
-    os << '\n';
-  }
-  std::cout << os.str();
-}
-
 TEST(LoamHdl32Test, RangeImageFindsThe32Rings) {
   PLUMB_REQUIRE_DATA(path, "cloud3d/hdl32_pair/251370668.pcd");
   const PointCloud cloud = io::read_pcd(path);
@@ -87,8 +64,6 @@ TEST(LoamHdl32Test, ScanToScanMatchesReferenceRelativePose) {
 
   const LoamFeatures prev = extract_loam_features(prev_cloud, hdl32_image(), LoamFeatureSettings{});
   const LoamFeatures cur = extract_loam_features(cur_cloud, hdl32_image(), LoamFeatureSettings{});
-  print_sector_counts("251370668", prev);
-  print_sector_counts("251371071", cur);
   ASSERT_EQ(prev.status, Status::kOk);
   ASSERT_EQ(cur.num_rings, 32);
   EXPECT_GE(cur.planes.size(), 48u);  // a structured scene: LOAM mode of the hybrid switch
@@ -98,9 +73,6 @@ TEST(LoamHdl32Test, ScanToScanMatchesReferenceRelativePose) {
     const Eigen::Isometry3d E = T_prev_cur_ref.inverse() * r.T_prev_cur;
     const double t_err = E.translation().norm();
     const double r_err_deg = so3::log(E.linear()).norm() * 180.0 / kPi;
-    std::cout << "loam_scan_to_scan: status " << r.status << ", " << r.iterations << " iterations, "
-              << r.num_edge << " edge + " << r.num_plane << " plane residuals, rmse " << r.rmse
-              << " m; vs relative.txt: " << t_err << " m, " << r_err_deg << " deg\n";
     EXPECT_EQ(r.status, Status::kOk);
     EXPECT_LT(t_err, 0.05);
     EXPECT_LT(r_err_deg, 0.3);

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// LOAM residuals (SEEDS eq. 5-7, 20): the cosine of eq. 5 against acos of the dot product, the
+// LOAM residuals (Zhou et al. 2021, eq. 5-7, 20): the cosine of eq. 5 against acos of the dot product, the
 // edge residual's norm against eq. 6's cross-product formula, and every analytic Jacobian against
 // central differences of the right perturbation T exp(delta).
 #include <cmath>

@@ -59,9 +59,6 @@ TEST_F(BimOdometryRunTest, TracksGroundTruthFromAKnownStart) {
   const plumb::RunReport r = plumb::run_bim_odometry(dump, *mesh_, settings);
   ASSERT_EQ(r.bim.size(), dump.num_frames());
   ASSERT_TRUE(r.has_ground_truth);
-  std::printf("  %zu frames, %.1f m: APE xy wheel %.3f, LiDAR %.3f, BIM %.3f m; anchors %zu/%zu accepted\n",
-              r.bim.size(), r.path_length, r.ape_rmse_wheel, r.ape_rmse_lidar, r.ape_rmse_bim, r.anchors_accepted,
-              r.anchors_attempted);
   EXPECT_GT(r.path_length, 5.0);
   EXPECT_LT(r.ape_rmse_bim, 0.08);
   EXPECT_LT(r.ape_rmse_lidar, 0.08);
@@ -85,7 +82,6 @@ TEST_F(BimOdometryRunTest, BimCorrectionRemovesAnOffsetTheFrontEndKeeps) {
   const std::size_t last = r.bim.size() - 1;
   const double bim_end = xy_error(r.bim.poses[last], gt.poses[last]);
   const double lidar_end = xy_error(r.lidar.poses[last], gt.poses[last]);
-  std::printf("  end error: LiDAR only %.3f m, BIM-corrected %.3f m\n", lidar_end, bim_end);
   EXPECT_GT(lidar_end, 0.2);
   EXPECT_LT(bim_end, 0.06);
 }

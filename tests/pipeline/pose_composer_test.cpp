@@ -82,8 +82,8 @@ TEST(PoseComposerTest, ScalarCaseIsTheKalmanUpdate) {
   EXPECT_NEAR(composer.covariance()(1, 1), 1e-2, 1e-15);
 }
 
-TEST(PoseComposerTest, StrongAnchorIsTheSeedsCorrection) {
-  // Λ -> ∞: M <- M_e · M exactly (SEEDS eq. 5).
+TEST(PoseComposerTest, StrongAnchorIsThePapersCorrection) {
+  // Λ -> ∞: M <- M_e · M exactly (Liu et al. 2022, sec. 3.3, step (5)).
   PoseComposer composer(pose(0, 0, 0), diag(1.0, 0.1));
   composer.add_motion(pose(2.0, 0.3, 0.2), diag(1e-2, 1e-3));
   const Isometry3d before = composer.pose();
@@ -168,8 +168,6 @@ TEST(PoseComposerTest, AnchorsBoundTheDriftOfABiasedOdometry) {
     worst_anchored = std::max(worst_anchored, (anchored.pose().translation() - truth.translation()).norm());
     worst_odometry = std::max(worst_odometry, (odometry.pose().translation() - truth.translation()).norm());
   }
-  std::printf("  40 m, 1 %% scale error: odometry worst %.3f m; anchored worst %.3f m, %.3f m right after anchors\n",
-              worst_odometry, worst_anchored, anchored_at_anchors);
   EXPECT_GT(worst_odometry, 0.15);
   EXPECT_LT(worst_anchored, 0.05);
   EXPECT_LT(anchored_at_anchors, 0.035);  // anchor noise: 1 cm per axis, max of 40 draws

@@ -89,7 +89,6 @@ TEST(SacIaRealTest, BunnyAsStrictAsPcl) {
   const SacIaResult r = align_sac_ia(moved, fsrc, target, ftgt, tree, s);
   ASSERT_NE(r.status, Status::kInsufficientData);
   const double fit = fitness(moved, target, r.T_target_source);
-  std::printf("bunny: fitness %.3g, scored %d, overlap %.3f\n", fit, r.num_scored, r.overlap);
   EXPECT_LT(fit, 5e-4);
   // ICP from there tightens it further.
   IcpSettings is;
@@ -100,7 +99,6 @@ TEST(SacIaRealTest, BunnyAsStrictAsPcl) {
   is.min_overlap = 0.5;
   const IcpResult icp = align_icp(moved, target, tree, r.T_target_source, is);
   const double fit_icp = fitness(moved, target, icp.T_target_source);
-  std::printf("bunny icp: fitness %.3g, overlap %.3f, status %s\n", fit_icp, icp.overlap, to_string(icp.status));
   EXPECT_LE(fit_icp, fit);
   EXPECT_LT(fit_icp, 1e-4);
 }
@@ -153,8 +151,6 @@ TEST(LocalizeRealTest, RoomScansFromRandomStarts) {
   is.max_correspondence_distance = 0.1;
   ref_p2p = align_icp(source, target, ref_p2p.T_target_source, is);
   const auto agree = pose_error(ref.T_target_source, ref_p2p.T_target_source);
-  std::printf("room ref: p2pl vs p2p %.4f m %.4f deg; overlap %.3f rmse %.4f\n", agree.first, agree.second / kDeg,
-              ref.overlap, ref.rmse);
   ASSERT_LT(agree.first, 0.02);
   ASSERT_LT(agree.second, 0.2 * kDeg);
   const Eigen::Isometry3d T_ref = ref.T_target_source;
@@ -174,10 +170,6 @@ TEST(LocalizeRealTest, RoomScansFromRandomStarts) {
     const LocalizeResult r = localize_coarse_to_fine(moved, prepared, lk);
     const Eigen::Isometry3d expected = T_ref * T_rand.inverse();
     const auto e = pose_error(r.T_target_source, expected);
-    const auto ec = pose_error(r.coarse.T_target_source, expected);
-    std::printf("start %2d: %s coarse %.3f m %.2f deg (%d it, %d scored, %.3fs) fine %.4f m %.3f deg overlap %.3f (%.3fs, prep %.3fs)\n",
-                k, to_string(r.status), ec.first, ec.second / kDeg, r.coarse.iterations, r.coarse.num_scored,
-                r.seconds_coarse, e.first, e.second / kDeg, r.overlap, r.seconds_fine, r.seconds_prepare);
     EXPECT_LT(e.first, 0.05) << "start " << k;
     EXPECT_LT(e.second, 0.5 * kDeg) << "start " << k;
     EXPECT_EQ(r.status, Status::kOk) << "start " << k;
@@ -219,8 +211,6 @@ TEST(IcpRealTest, Hdl32PairMatchesReference) {
   is.min_overlap = 0.0;
   const IcpResult r = align_icp(source, target, tree, gated.T_target_source, is);
   const auto e = pose_error(r.T_target_source, T_ref);
-  std::printf("hdl32: %s %.4f m %.4f deg overlap %.3f it %d+%d\n", to_string(r.status), e.first, e.second / kDeg,
-              gated.overlap, gated.iterations, r.iterations);
   EXPECT_LT(e.first, 0.05);
   EXPECT_LT(e.second, 0.3 * kDeg);
   EXPECT_GT(gated.degeneracy, 0.0);

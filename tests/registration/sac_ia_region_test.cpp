@@ -114,7 +114,6 @@ TEST(LocalizeAmbiguityTest, TwoCopiesAreAmbiguousUnlessHinted) {
   source.normals.clear();
   target.normals.clear();
   const LocalizeResult both = localize_coarse_to_fine(source, target, s);
-  std::printf("  twins: %s, overlap %.2f, second %.2f\n", to_string(both.status), both.overlap, both.second_overlap);
   EXPECT_TRUE(both.ambiguous);
   EXPECT_EQ(both.status, Status::kRejected);
   EXPECT_GT(both.second_overlap, 0.9 * both.overlap);

@@ -239,8 +239,6 @@ TEST(SacIaTest, EarlyTerminationStopsSoonerOnEasyCase) {
   const SacIaResult fast = align_sac_ia(e.source, e.features, e.target, e.features, tree, s);
   s.confidence = 1.0;
   const SacIaResult full = align_sac_ia(e.source, e.features, e.target, e.features, tree, s);
-  std::printf("easy: %d iterations (%zu feature queries) vs %d\n", fast.iterations, fast.num_feature_queries,
-              full.iterations);
   EXPECT_TRUE(fast.converged);
   EXPECT_EQ(fast.status, Status::kOk);
   EXPECT_LT(fast.iterations, full.iterations / 5);
@@ -254,7 +252,7 @@ TEST(SacIaTest, EarlyTerminationStopsSoonerOnEasyCase) {
   EXPECT_LE(full.score, fast.score);
 }
 
-// The similarity-weighted draw (default) against the seed's uniform draw among the k candidates.
+// The similarity-weighted draw (default) against the paper's uniform draw (Liu et al. 2022, sec. 1.2) among the k candidates.
 // With exact twins the closest candidate is always right: the weighted draw finds an all-correct
 // sample at once. With noisy signatures the closest one is often wrong: both still find the
 // motion. The winner's inlier statistics (gathered while scoring) equal a recount.
@@ -274,8 +272,6 @@ TEST(SacIaTest, SimilarityWeightedDrawFindsTheMotionSooner) {
     const SacIaResult uniform = align_sac_ia(e.source, e.features, e.target, target_features, tree, s);
     s.similarity_weighted = true;
     const SacIaResult weighted = align_sac_ia(e.source, e.features, e.target, target_features, tree, s);
-    std::printf("%s twins: uniform %d iterations, weighted %d\n", exact ? "exact" : "noisy", uniform.iterations,
-                weighted.iterations);
     for (const SacIaResult* r : {&uniform, &weighted}) {
       EXPECT_EQ(r->status, Status::kOk) << exact;
       EXPECT_LT(rms_offset(e.source, r->T_target_source, e.T_target_source), 0.01) << exact;

@@ -179,8 +179,6 @@ TEST(CloudToScanTest, Hdl32ScansMatchTheReferenceMotion) {
   ps.max_correspondence_distance = 1.0;
   ps.max_iterations = 100;
   const PlicpResult m = plicp(cur.scan, PlicpReference(ref.scan), Pose2{0.0, 0.0, 0.0}, ps);
-  std::cout << "[ hdl32 scans ] PLICP " << to_string(m.status) << ": x " << m.T_ref_cur.x << " y " << m.T_ref_cur.y
-            << " theta " << m.T_ref_cur.theta << '\n';
   ASSERT_EQ(m.status, Status::kOk);
   EXPECT_NEAR(m.T_ref_cur.x, 0.485657, 0.03);
   EXPECT_NEAR(m.T_ref_cur.y, 0.10642, 0.03);

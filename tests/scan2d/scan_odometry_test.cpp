@@ -58,11 +58,6 @@ LogRun run_log(const std::string& path, std::size_t max_scans, const ScanOdometr
   run.odom10 = relation_error(odom, corrected, 10);
   run.sm1 = relation_error(run.result.poses, corrected, 1);
   run.sm10 = relation_error(run.result.poses, corrected, 10);
-  std::printf("odometry 1: %.2f cm %.3f deg, 10: %.2f cm %.3f deg\n", run.odom1.trans_cm, run.odom1.rot_deg,
-              run.odom10.trans_cm, run.odom10.rot_deg);
-  std::printf("plicp    1: %.2f cm %.3f deg, 10: %.2f cm %.3f deg (fallbacks %zu, it %.1f, %.3f ms)\n",
-              run.sm1.trans_cm, run.sm1.rot_deg, run.sm10.trans_cm, run.sm10.rot_deg,
-              run.result.num_fallbacks, run.result.mean_iterations, run.result.mean_match_ms);
   return run;
 }
 

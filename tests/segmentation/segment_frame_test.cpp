@@ -112,10 +112,6 @@ TEST(SegmentFrameTest, SyntheticRoomGroundAndWallRecall) {
     EXPECT_LT(angle_to_z(r.ground.plane.normal), 0.5 * kDeg);
     EXPECT_NEAR(r.ground.plane.offset, -1.2, 0.01);  // normal up, D = -height
     const Recall rec = recall_of(room, r);
-    std::cout << "[ synthetic room, " << (normals == FrameNormals::kNearest ? "kNearest" : "kVoxelBlock")
-              << " normals, sensor_height " << height << " ] ground recall " << rec.ground
-              << ", wall recall " << rec.wall << ", non-floor labelled ground " << rec.ground_false << ", "
-              << r.vertical.planes.size() << " vertical planes\n";
     EXPECT_GE(rec.ground, 0.98);
     EXPECT_GE(rec.wall, 0.98);
     EXPECT_LT(rec.ground_false, 0.02);  // only the bottoms of legs, pillar and ball (< 5 cm)
@@ -234,10 +230,6 @@ TEST(SegmentFrameTest, RoomScanGroundIsTheFloorNotTheCeiling) {
     for (std::size_t i : r.ground.inliers) high_ground += cloud.points[i].z() > 0.0f ? 1 : 0;
     EXPECT_EQ(high_ground, 0u);
     for (const VerticalPlane& vp : r.vertical.planes) EXPECT_LT(std::abs(vp.plane.normal.z()), std::sin(10 * kDeg) + 1e-6);
-    std::cout << "[ room_scan1, sensor_height " << height << " ] ground n = " << r.ground.plane.normal.transpose()
-              << " D = " << r.ground.plane.offset << "; " << r.num_ground << " ground, " << r.num_vertical
-              << " vertical (" << r.vertical.planes.size() << " planes), " << r.num_other << " other; "
-              << r.timings.total * 1e3 << " ms\n";
   }
 }
 
@@ -258,8 +250,6 @@ TEST(SegmentFrameTest, Office1FloorInCameraFrameTurnedUp) {
   EXPECT_LT(fraction_below(cloud, r.ground.plane, 0.1), 0.01);
   EXPECT_GT(r.num_ground, cloud.finite_indices().size() / 50);
   EXPECT_GE(r.vertical.planes.size(), 1u);
-  std::cout << "[ office1 ] ground n = " << r.ground.plane.normal.transpose() << " D = " << r.ground.plane.offset
-            << "; " << r.num_ground << " ground, " << r.num_vertical << " vertical, " << r.num_other << " other\n";
 }
 
 TEST(SegmentFrameTest, Hdl32FrameHasGroundBelowAndWalls) {
@@ -272,17 +262,13 @@ TEST(SegmentFrameTest, Hdl32FrameHasGroundBelowAndWalls) {
   EXPECT_LT(fraction_below(cloud, r.ground.plane, 0.2), 0.01);
   EXPECT_GE(r.vertical.planes.size(), 2u);
   EXPECT_EQ(r.num_ground + r.num_vertical + r.num_other, cloud.size());
-  std::cout << "[ hdl32 ] ground n = " << r.ground.plane.normal.transpose() << " D = " << r.ground.plane.offset
-            << "; " << r.num_ground << " ground, " << r.num_vertical << " vertical (" << r.vertical.planes.size()
-            << " planes), " << r.num_other << " other; sample " << r.num_sample << " points; "
-            << r.timings.total * 1e3 << " ms\n";
 }
 
-// ISPRS filter test sample 11 (urban, steep slope) with its reference ground: type I (ground
-// rejected) and type II (object accepted as ground) errors of the single-plane ground. Reported
-// only (one plane cannot follow hilly terrain: the lowest large plane covers the foot of the slope);
-// the bounds just catch a segmentation that takes roofs or everything for ground.
-TEST(SegmentFrameTest, IsprsSample11TypeIAndTypeIIErrors) {
+// ISPRS filter test sample 11 (urban, steep slope) with its reference ground: the type II error
+// (object accepted as ground) of the single-plane ground. The type I error (ground rejected) is not
+// checked: one plane cannot follow hilly terrain, the lowest large plane covers the foot of the
+// slope. The bounds catch a segmentation that takes roofs or everything for ground.
+TEST(SegmentFrameTest, IsprsSample11TypeIIError) {
   PLUMB_REQUIRE_DATA(all_path, "cloud3d/isprs_terrain/samp11-utm.pcd");
   PLUMB_REQUIRE_DATA(ground_path, "cloud3d/isprs_terrain/samp11-utm-ground.pcd");
   PointCloud cloud = io::read_cloud(all_path);
@@ -319,19 +305,11 @@ TEST(SegmentFrameTest, IsprsSample11TypeIAndTypeIIErrors) {
   s.ground.max_normal_angle = 20 * kDeg;
   const SegmentResult r = segment_frame(cloud, s);
   ASSERT_EQ(r.status, Status::kOk);
-  std::size_t type1 = 0, type2 = 0;
+  std::size_t type2 = 0;
   for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const bool labelled = r.labels[i] == kSegmentGround;
-    type1 += is_ground[i] && !labelled ? 1 : 0;
-    type2 += !is_ground[i] && labelled ? 1 : 0;
+    type2 += !is_ground[i] && r.labels[i] == kSegmentGround ? 1 : 0;
   }
-  const double e1 = static_cast<double>(type1) / static_cast<double>(num_truth);
   const double e2 = static_cast<double>(type2) / static_cast<double>(cloud.size() - num_truth);
-  const double total = static_cast<double>(type1 + type2) / static_cast<double>(cloud.size());
-  std::cout << "[ ISPRS samp11 ] type I " << 100 * e1 << " %, type II " << 100 * e2 << " %, total " << 100 * total
-            << " % (" << num_truth << " ground of " << cloud.size() << ")\n";
-  ::testing::Test::RecordProperty("isprs_samp11_type1_percent", std::to_string(100 * e1));
-  ::testing::Test::RecordProperty("isprs_samp11_type2_percent", std::to_string(100 * e2));
   EXPECT_GT(r.num_ground, 0u);
   EXPECT_LT(e2, 0.1);  // the plane is not through the buildings
 }
