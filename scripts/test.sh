@@ -59,16 +59,34 @@ if [ "$fuzz_seconds" -gt 0 ]; then
         -DPLUMB_BUILD_FUZZERS=ON -DPLUMB_BUILD_TESTS=OFF -DPLUMB_BUILD_BENCH=OFF \
         -DPLUMB_BUILD_EXAMPLES=OFF >/dev/null
   cmake --build build/fuzz -j"$jobs" --target plumb_fuzzers
+  # Plain-text seeds for the CARMEN parser: the first lines of each message type of the shared
+  # logs, inflated into the build tree (the repository keeps only hand-written seeds).
+  mkdir -p build/fuzz/seeds_carmen
+  for log in "$data_dir"/laser2d/carmen_corrected/*.log.gz; do
+    gzip -dc "$log" | awk 'seen[$1]++ < 4' > "build/fuzz/seeds_carmen/$(basename "$log" .gz)"
+  done
   for fuzzer in build/fuzz/fuzz/plumb_*_fuzz; do
     [ -x "$fuzzer" ] || continue
     name="$(basename "$fuzzer")"
+    target="${name#plumb_}"
+    target="${target%_fuzz}"
     corpus="build/fuzz/corpus_$name"
     mkdir -p "$corpus"
-    seeds="fuzz/seeds/${name#plumb_}"
-    seeds="${seeds%_fuzz}"
+    seeds=()
+    [ -d "fuzz/seeds/$target" ] && seeds+=("fuzz/seeds/$target")
+    options=()
+    # Seeds read from the shared data. Where its files are large, inputs are capped at 16 KiB
+    # (libFuzzer cuts longer seeds to that): a file's first lines cover the reader as well as all
+    # of it, at a hundred times the executions per second.
+    case "$target" in
+      carmen) seeds+=(build/fuzz/seeds_carmen) ;;
+      carmen_gz) seeds+=("$data_dir/laser2d/carmen_corrected") ;;
+      calib_tuples) seeds+=("$data_dir/laser2d/calibration_censi"); options+=(-max_len=16384) ;;
+      trajectory) seeds+=("$data_dir/trajectories/kitti00"); options+=(-max_len=16384) ;;
+    esac
     echo "-- $name"
-    "$fuzzer" -max_total_time="$fuzz_seconds" -rss_limit_mb=2048 -print_final_stats=1 \
-      "$corpus" $( [ -d "$seeds" ] && echo "$seeds" ) 2>&1 | tail -n 12
+    "$fuzzer" -max_total_time="$fuzz_seconds" -rss_limit_mb=2048 -print_final_stats=1 ${options[@]+"${options[@]}"} \
+      "$corpus" ${seeds[@]+"${seeds[@]}"} 2>&1 | tail -n 12
   done
 fi
 

@@ -14,12 +14,14 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "cli_support.hpp"
 #include "registry.hpp"
 #include "plumb/calibration/odometry_laser.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/calibration/tuple_extraction.hpp"
 #include "plumb/io/calib_tuples.hpp"
 #include "plumb/io/carmen.hpp"
+#include "plumb/io/input_file.hpp"
 #include "plumb/io/wheel_encoders.hpp"
 
 namespace plumb::cli {
@@ -40,21 +42,23 @@ struct CalibrateOptions {
 
 /// What tuple extraction from a log did (absent when tuples came from a file).
 struct ExtractionSummary {
-  std::size_t scans = 0, pairs = 0, tuples = 0, without_odometry = 0, speed_changes = 0, match_failures = 0;
+  std::size_t scans = 0, pairs = 0, tuples = 0, without_odometry = 0, speed_changes = 0, match_failures = 0,
+              dropped_scans = 0;
 };
 
 /// Tuples from a laser log + wheel encoder log: PLICP between scans `spacing` apart.
 std::vector<CalibrationTuple> tuples_from_logs(const CalibrateOptions& o, ExtractionSummary& summary) {
   const io::CarmenLog log = io::read_carmen(o.log_path);
+  PLUMB_CHECK(!log.lasers.empty(), o.log_path << ": no laser scan (FLASER, RAWLASER or ROBOTLASER1)");
+  // As `plumb scan2d`: a scan whose stamp does not increase is dropped with a warning naming its
+  // line, rather than refusing the whole log; wheel readings are interpolated at the kept stamps.
+  const std::vector<std::size_t> kept = indices_with_increasing_stamps(
+      o.log_path, log.lasers.size(), [&](std::size_t k) { return log.lasers[k].scan.stamp; },
+      [&](std::size_t k) { return log.lasers[k].line; }, "scan");
   std::vector<LaserScan> scans;
-  scans.reserve(log.lasers.size());
-  for (const io::CarmenLaser& laser : log.lasers) scans.push_back(laser.scan);
-  PLUMB_CHECK(!scans.empty(), o.log_path << ": no laser scan (FLASER, RAWLASER or ROBOTLASER1)");
-  for (std::size_t k = 1; k < scans.size(); ++k) {
-    PLUMB_CHECK(scans[k].stamp > scans[k - 1].stamp,
-                o.log_path << ":" << log.lasers[k].line << ": laser timestamp " << scans[k].stamp
-                           << " does not increase");
-  }
+  scans.reserve(kept.size());
+  for (std::size_t k : kept) scans.push_back(log.lasers[k].scan);
+  summary.dropped_scans = log.lasers.size() - kept.size();
   io::WheelEncoderReadSettings wheel_settings;
   wheel_settings.ticks_per_revolution = o.ticks_per_revolution;
   const std::vector<WheelEncoderReading> wheels = io::read_wheel_encoders(o.wheels_path, wheel_settings);
@@ -65,8 +69,12 @@ std::vector<CalibrationTuple> tuples_from_logs(const CalibrateOptions& o, Extrac
     settings.nominal = {o.nominal[0], o.nominal[1], o.nominal[2], Pose2{o.nominal[3], o.nominal[4], o.nominal[5]}};
   }
   const TupleExtractionResult ex = extract_calibration_tuples(scans, wheels, plicp_scan_matcher(), settings);
-  summary = {scans.size(),           ex.num_pairs,         ex.tuples.size(),
-             ex.num_without_odometry, ex.num_speed_changes, ex.num_match_failures};
+  summary.scans = scans.size();
+  summary.pairs = ex.num_pairs;
+  summary.tuples = ex.tuples.size();
+  summary.without_odometry = ex.num_without_odometry;
+  summary.speed_changes = ex.num_speed_changes;
+  summary.match_failures = ex.num_match_failures;
   PLUMB_CHECK(ex.status == Status::kOk,
               o.log_path << " + " << o.wheels_path << ": no calibration tuple: " << ex.num_pairs << " scan pairs, "
                          << ex.num_without_odometry << " without wheel readings around their stamps (do the two "
@@ -84,6 +92,17 @@ void run_calibrate(const CalibrateOptions& o) {
               "calibrate: --log and --wheels go together (laser log and wheel encoder log)");
   PLUMB_CHECK(o.nominal.empty() || o.nominal.size() == 6,
               "calibrate: --nominal takes 6 values (r_L r_R axle l_x l_y l_theta), got " << o.nominal.size());
+  if (o.nominal.size() == 6) {
+    PLUMB_CHECK(o.nominal[0] > 0.0 && o.nominal[1] > 0.0 && o.nominal[2] > 0.0,
+                "--nominal: the wheel radii and the axle must be > 0 m, got " << o.nominal[0] << ' ' << o.nominal[1]
+                                                                                << ' ' << o.nominal[2]);
+    PLUMB_CHECK(std::abs(o.nominal[5]) <= 2.0 * 3.14159265358979323846,
+                "--nominal: l_theta " << o.nominal[5] << " is outside [-2 pi, 2 pi] (radians, not degrees)");
+  }
+  // Name a directory or a missing file as such (the readers would report it as malformed).
+  for (const std::string* path : {&o.tuples_path, &o.log_path, &o.wheels_path}) {
+    if (!path->empty()) io::check_input_file(*path);
+  }
   ExtractionSummary summary;
   const std::vector<CalibrationTuple> tuples =
       from_file ? io::read_calib_tuples(o.tuples_path) : tuples_from_logs(o, summary);
@@ -127,17 +146,18 @@ void run_calibrate(const CalibrateOptions& o) {
                            {"tuples", summary.tuples},
                            {"without_odometry", summary.without_odometry},
                            {"speed_changes", summary.speed_changes},
-                           {"match_failures", summary.match_failures}};
+                           {"match_failures", summary.match_failures},
+                           {"dropped_scans", summary.dropped_scans}};
     }
     std::cout << out.dump() << '\n';
     return;
   }
   auto sd = [&r](int i) { return std::sqrt(r.covariance(i, i)); };
   if (from_logs) {
-    std::printf("%zu scans, %zu pairs: %zu tuples; skipped %zu without wheel readings, %zu with changing wheel "
-                "speeds, %zu refused by the scan matcher\n",
-                summary.scans, summary.pairs, summary.tuples, summary.without_odometry, summary.speed_changes,
-                summary.match_failures);
+    std::printf("%zu scans (%zu dropped, stamp not increasing), %zu pairs: %zu tuples; skipped %zu without wheel "
+                "readings, %zu with changing wheel speeds, %zu refused by the scan matcher\n",
+                summary.scans, summary.dropped_scans, summary.pairs, summary.tuples, summary.without_odometry,
+                summary.speed_changes, summary.match_failures);
   }
   std::printf("calibration of %s: %zu tuples, %zu used after outlier rejection\n", source.c_str(),
               r.num_tuples, r.num_inliers);
@@ -162,6 +182,9 @@ void register_calibrate_command(CLI::App& app) {
       "calibrate", "Wheel radii, axle and laser pose from calibration tuples (Censi et al. T-RO 2013)");
   cmd->add_option("TUPLES", options->tuples_path,
                   "Tuple file: JSON lines {\"T\", \"phi_l\", \"phi_r\", \"sm\": [x, y, theta]}");
+  cmd->footer(
+      "With --log, a scan whose stamp does not increase over the previous one is dropped, with a\n"
+      "warning on stderr naming LOG:LINE, and counted in extraction.dropped_scans of --json.");
   cmd->add_option("--log", options->log_path,
                   "Instead of TUPLES: CARMEN laser log (FLASER / RAWLASER / ROBOTLASER1, plain or .gz); "
                   "tuples are made by PLICP between scans --spacing apart");
@@ -170,23 +193,24 @@ void register_calibrate_command(CLI::App& app) {
                   "with --ticks-per-rev), on the laser log's clock");
   cmd->add_option("--ticks-per-rev", options->ticks_per_revolution,
                   "Wheel columns are encoder ticks, this many per wheel revolution")
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number(1e9));
   cmd->add_option("--spacing", options->spacing, "With --log: match scan k against scan k + spacing")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   cmd->add_option("--nominal", options->nominal,
                   "With --log: nominal r_L r_R axle [m] l_x l_y [m] l_theta [rad], only to seed the scan matcher")
-      ->expected(6);
+      ->expected(6)
+      ->check(finite_number(-100.0, 100.0));
   cmd->add_option("--tuples-out", options->tuples_out, "With --log: also write the tuples (Censi's format)");
   cmd->add_flag("--json", options->json,
                 "Print one JSON object: axle, l_diam, r_diam [m], l_x, l_y [m], l_theta [rad], covariance "
                 "6x6 of (r_L, r_R, axle, l_x, l_y, l_theta) (radii, as Censi's tool)");
   cmd->add_option("--outlier-iterations", options->outlier_iterations, "Rounds of outlier rejection")
-      ->check(CLI::NonNegativeNumber)
+      ->check(finite_number(0.0, 1000.0))
       ->capture_default_str();
   cmd->add_option("--outlier-quantile", options->outlier_quantile,
                   "Per round, drop tuples with residuals above this quantile")
-      ->check(CLI::Range(0.5, 1.0))
+      ->check(finite_number(0.5, 1.0))
       ->capture_default_str();
   cmd->callback([options]() { run_calibrate(*options); });
 }

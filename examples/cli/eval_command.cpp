@@ -12,6 +12,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "cli_support.hpp"
 #include "registry.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/eval/align.hpp"
@@ -37,6 +38,7 @@ struct EvalOptions {
   std::vector<double> drift_at_time;
   double max_time_difference = 0.01;
   double time_offset = 0.0;
+  double min_pair_fraction = eval::AssociationSettings{}.min_pair_fraction;
   bool orthonormalize = false;
 };
 
@@ -70,17 +72,41 @@ void run_eval(const EvalOptions& o) {
     reference = io::read_kitti(o.reference_path, o.reference_times, read_settings);
   }
 
+  PLUMB_CHECK(o.rpe_unit != "frames" || o.rpe_delta == std::floor(o.rpe_delta),
+              "--rpe-delta: " << o.rpe_delta << " is not a whole number of frames (use --rpe-unit m for metres)");
+  // Library messages about the pair of trajectories say "associate: ..." or "umeyama: ...";
+  // name the two files in front.
+  const std::string inputs = o.estimate_path + " vs " + o.reference_path + ": ";
   eval::AssociationSettings association_settings;
   association_settings.max_time_difference = o.max_time_difference;
   association_settings.time_offset = o.time_offset;
-  const eval::AssociationResult associated = eval::associate(estimate, reference, association_settings);
-  const Trajectory& est = associated.estimate;
-  const Trajectory& ref = associated.reference;
-
+  association_settings.min_pair_fraction = o.min_pair_fraction;
+  eval::AssociationResult associated;
   const eval::AlignMode align = parse_align(o.align);
   eval::ApeSettings ape_settings;
   ape_settings.align = align;
-  const eval::ApeResult ape = eval::compute_ape(est, ref, ape_settings);
+  eval::ApeResult ape;
+  try {
+    associated = eval::associate(estimate, reference, association_settings);
+    ape = eval::compute_ape(associated.estimate, associated.reference, ape_settings);
+  } catch (const Error& e) {
+    throw Error(inputs + e.what());
+  }
+  const Trajectory& est = associated.estimate;
+  const Trajectory& ref = associated.reference;
+  // A degenerate fit still returns a rotation, but an arbitrary one about the line of the
+  // positions: every error after it would be made up.
+  if (align != eval::AlignMode::kNone && ape.status != Status::kOk) {
+    PLUMB_THROW(inputs << "--align " << o.align << " is not determined by the " << est.size()
+                       << " associated positions ("
+                       << (ape.status == Status::kDegenerate ? "they lie on a line, so the rotation about it is free"
+                                                             : "too few poses")
+                       << "); use --align none, or trajectories that turn");
+  }
+  for (std::size_t index : o.drift_at) {
+    PLUMB_CHECK(index < ref.size(), "--drift-at: pose index " << index << " is out of range: " << ref.size()
+                                        << " pose pairs were associated (indices 0.." << ref.size() - 1 << ")");
+  }
 
   eval::RpeSettings rpe_settings;
   rpe_settings.delta = o.rpe_delta;
@@ -167,13 +193,18 @@ void run_eval(const EvalOptions& o) {
   }
   std::printf("  (RPE delta %g %s, consecutive pairs along the %s)\n\n", o.rpe_delta, o.rpe_unit.c_str(),
               o.rpe_pairs_along == "ref" ? "reference" : "estimate");
-  for (std::size_t k = 0; k + 1 < drift.size(); ++k) {
-    const eval::DriftSample& s = drift[k];
-    std::printf("drift at pose %zu: %.4f %% (error %.4f m over %.3f m)\n", s.index, s.drift_pct, s.error,
-                s.path_length);
-  }
-  std::printf("drift at the end: %.4f %% (error %.4f m over %.3f m)\n", drift_end.drift_pct, drift_end.error,
-              drift_end.path_length);
+  // Drift is undefined before the reference has moved (path length 0): say so instead of "nan".
+  const auto print_drift = [](const std::string& where, const eval::DriftSample& s) {
+    if (std::isfinite(s.drift_pct)) {
+      std::printf("drift at %s: %.4f %% (error %.4f m over %.3f m)\n", where.c_str(), s.drift_pct, s.error,
+                  s.path_length);
+    } else {
+      std::printf("drift at %s: undefined, the reference has not moved yet (error %.4f m)\n", where.c_str(),
+                  s.error);
+    }
+  };
+  for (std::size_t k = 0; k + 1 < drift.size(); ++k) print_drift("pose " + std::to_string(drift[k].index), drift[k]);
+  print_drift("the end", drift_end);
   if (segments.status == Status::kOk) {
     std::printf("KITTI segments (100..800 m): translation %.4f %%, rotation %.6f deg/m (%zu segments)\n",
                 segments.translation_pct, segments.rotation_deg_per_m, segments.segments.size());
@@ -185,6 +216,12 @@ void run_eval(const EvalOptions& o) {
 void register_eval_command(CLI::App& app) {
   auto options = std::make_shared<EvalOptions>();
   CLI::App* cmd = app.add_subcommand("eval", "Evaluate a trajectory against a reference: APE, RPE, drift %");
+  cmd->footer(
+      "Refused with exit code 1 and a message naming the file (and line): stamps that do not strictly\n"
+      "increase, a coordinate beyond 1e9 m, fewer than 3 associated pose pairs or fewer than\n"
+      "--min-pair-fraction of the shorter trajectory's poses (stamps in different units or clocks),\n"
+      "and an --align se3/sim3 that the associated positions do not determine (all on a line).\n"
+      "drift_pct is null in --json (\"undefined\" in the table) while the reference has not moved.");
   cmd->add_option("EST", options->estimate_path, "Estimated trajectory file")->required();
   cmd->add_option("REF", options->reference_path, "Reference (ground-truth) trajectory file")->required();
   cmd->add_option("--format", options->format, "File format of both trajectories")
@@ -193,8 +230,8 @@ void register_eval_command(CLI::App& app) {
   cmd->add_option("--align", options->align, "Alignment of the estimate to the reference (Umeyama)")
       ->check(CLI::IsMember({"se3", "sim3", "none"}))
       ->capture_default_str();
-  cmd->add_option("--rpe-delta", options->rpe_delta, "RPE step, in --rpe-unit")
-      ->check(CLI::PositiveNumber)
+  cmd->add_option("--rpe-delta", options->rpe_delta, "RPE step, in --rpe-unit (a whole number for frames)")
+      ->check(positive_number())
       ->capture_default_str();
   cmd->add_option("--rpe-unit", options->rpe_unit, "Unit of --rpe-delta: m (path length) or frames")
       ->check(CLI::IsMember({"m", "frames"}))
@@ -207,11 +244,17 @@ void register_eval_command(CLI::App& app) {
   cmd->add_option("--est-times", options->estimate_times, "KITTI times file of the estimate");
   cmd->add_option("--ref-times", options->reference_times, "KITTI times file of the reference");
   cmd->add_option("--drift-at", options->drift_at, "Also report drift % at these pose indices (after association)");
-  cmd->add_option("--drift-at-time", options->drift_at_time, "Also report drift % at the poses nearest these stamps [s]");
+  cmd->add_option("--drift-at-time", options->drift_at_time, "Also report drift % at the poses nearest these stamps [s]")
+      ->check(finite_number());
   cmd->add_option("--max-time-diff", options->max_time_difference, "Largest stamp difference to associate [s]")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->capture_default_str();
   cmd->add_option("--time-offset", options->time_offset, "Offset added to the estimate's stamps [s]")
+      ->check(finite_number())
+      ->capture_default_str();
+  cmd->add_option("--min-pair-fraction", options->min_pair_fraction,
+                  "Fewest associated pairs, as a share of the shorter trajectory's poses (0 to 1)")
+      ->check(finite_number(0.0, 1.0))
       ->capture_default_str();
   cmd->add_flag("--orthonormalize", options->orthonormalize,
                 "Project KITTI rotations onto SO(3) (default: keep them as printed, as evo does)");

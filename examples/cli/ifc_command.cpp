@@ -14,11 +14,13 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "cli_support.hpp"
 #include "registry.hpp"
 #include "plumb/bim/mesh.hpp"
 #include "plumb/bim/sample.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/io/cloud_io.hpp"
+#include "plumb/io/input_file.hpp"
 
 namespace plumb::cli {
 namespace {
@@ -42,6 +44,7 @@ struct Loaded {
 };
 
 Loaded load(const std::string& path) {
+  io::check_input_file(path);  // "is a directory" rather than the STEP parser's "not a STEP file"
   const auto t0 = std::chrono::steady_clock::now();
   bim::IfcModel model = bim::read_ifc(path);
   const auto t1 = std::chrono::steady_clock::now();
@@ -181,8 +184,10 @@ void register_ifc_commands(CLI::App& app) {
   CLI::App* cc = app.add_subcommand("ifc2cloud", "Sample an IFC model's surfaces into a labelled point cloud");
   cc->add_option("MODEL", cloud->model, "IFC file (IFC2X3 / IFC4)")->required();
   cc->add_option("-o,--output", cloud->output, "Output cloud (.ply or .pcd); labels = element index")->required();
-  cc->add_option("--spacing", cloud->spacing, "Mean point spacing [m]")->check(CLI::PositiveNumber)->capture_default_str();
-  cc->add_option("--seed", cloud->seed, "Random seed")->capture_default_str();
+  cc->add_option("--spacing", cloud->spacing, "Mean point spacing [m]")
+      ->check(positive_number(1000.0))
+      ->capture_default_str();
+  cc->add_option("--seed", cloud->seed, "Random seed")->check(non_negative_number())->capture_default_str();
   cc->add_option("--types", cloud->types, "Comma-separated IFC types to keep, e.g. IfcWall,IfcSlab");
   cc->add_option("--storey", cloud->storey, "Storey name or index to keep");
   cc->add_option("--elements-out", cloud->elements_out, "Write the element table (JSON) here");

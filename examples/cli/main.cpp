@@ -2,8 +2,17 @@
 // The `plumb` command line. Each subcommand lives in its own file `<name>_command.cpp` that
 // registers itself with PLUMB_CLI_COMMAND (registry.hpp); it does its work in its CLI11 callback.
 //
-// Exit codes: 0 success; 1 an input could not be used (plumb::Error, message names the file and
-// line); CLI11's own codes (>= 100) for usage errors such as an unknown option.
+// Exit codes, one scheme for every subcommand:
+//   0    success (also --help, --version);
+//   1    the subcommand could not do its work: an input is unusable (plumb::Error; the one stderr
+//        line `plumb: error: MESSAGE` names the file and line, or the option), or an output could
+//        not be written;
+//   3    the job ran to the end and wrote its outputs, but its result failed (cli::JobFailed, see
+//        cli_support.hpp): e.g. `register` whose status is not ok, `scan2d` where no scan matched.
+//        stdout holds the result as usual, stderr one line `plumb: failed: MESSAGE` with the status;
+//   >= 100 usage errors found by CLI11 (unknown option, value failing its check, missing argument),
+//        with CLI11's own codes (105 for a value failing its check; the message names the option).
+// (2 is left unused: shells and some tools read it as "misuse", which CLI11's codes already cover.)
 
 #include <algorithm>
 #include <exception>
@@ -15,6 +24,7 @@
 
 #include "plumb/core/error.hpp"
 #include "plumb/version.hpp"
+#include "cli_support.hpp"
 #include "registry.hpp"
 
 namespace plumb::cli {
@@ -50,6 +60,9 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("plumb ") + PLUMB_VERSION_STRING,
                        "Print the version and exit");
   app.require_subcommand(1);
+  app.footer(
+      "Exit codes: 0 ok; 1 unusable input or unwritable output (stderr names it); 3 the job ran and\n"
+      "wrote its outputs but its result failed (stderr says why); >= 100 usage errors (CLI11).");
 
   plumb::cli::register_all_commands(app);
 
@@ -57,6 +70,9 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
+  } catch (const plumb::cli::JobFailed& e) {
+    std::cerr << "plumb: failed: " << e.what() << '\n';
+    return plumb::cli::kExitJobFailed;
   } catch (const plumb::Error& e) {
     std::cerr << "plumb: error: " << e.what() << '\n';
     return 1;

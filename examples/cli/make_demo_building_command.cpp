@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "plumb/bim/demo_building.hpp"
+#include "cli_support.hpp"
 #include "registry.hpp"
 
 namespace plumb::cli {
@@ -68,18 +69,22 @@ void register_make_demo_building_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "make-demo-building", "Write a procedural office floor (corridor, rooms, doors, windows) as an IFC4 file");
   cmd->add_option("-o,--output", o->output, "Output IFC file")->required();
-  cmd->add_option("--length", s.length, "Outer length along x [m]")->capture_default_str();
-  cmd->add_option("--width", s.width, "Outer width along y [m]")->capture_default_str();
-  cmd->add_option("--rooms", s.num_rooms, "Rooms per storey off the corridor")->capture_default_str();
-  cmd->add_option("--storeys", s.num_storeys, "Storeys with the same plan")->capture_default_str();
-  cmd->add_option("--storey-height", s.storey_height, "Floor-to-floor height [m]")->capture_default_str();
-  cmd->add_option("--corridor-width", s.corridor_width, "Clear corridor width [m]")->capture_default_str();
-  cmd->add_option("--door-width", s.door_width, "Clear door width, >= 0.9 [m]")->capture_default_str();
+  cmd->add_option("--length", s.length, "Outer length along x [m]")->check(positive_number(1000.0))->capture_default_str();
+  cmd->add_option("--width", s.width, "Outer width along y [m]")->check(positive_number(1000.0))->capture_default_str();
+  cmd->add_option("--rooms", s.num_rooms, "Rooms per storey off the corridor")->check(finite_number(2, 1000))->capture_default_str();
+  cmd->add_option("--storeys", s.num_storeys, "Storeys with the same plan")->check(finite_number(1, 100))->capture_default_str();
+  cmd->add_option("--storey-height", s.storey_height, "Floor-to-floor height [m]")->check(positive_number(100.0))->capture_default_str();
+  cmd->add_option("--corridor-width", s.corridor_width, "Clear corridor width [m]")->check(positive_number(100.0))->capture_default_str();
+  cmd->add_option("--door-width", s.door_width, "Clear door width, >= 0.9 [m]")->check(finite_number(0.9, 100.0))->capture_default_str();
   cmd->add_option("--entrance-width", s.entrance_width, "Entrance at the west end of the corridor, 0 for none [m]")
+      ->check(non_negative_number(100.0))
       ->capture_default_str();
   cmd->add_option("--column-size", s.column_size, "Square columns at wall junctions, 0 for none [m]")
+      ->check(non_negative_number(100.0))
       ->capture_default_str();
-  cmd->add_option("--seed", s.seed, "Room widths, door positions and GUIDs")->capture_default_str();
+  cmd->add_option("--seed", s.seed, "Room widths, door positions and GUIDs")
+      ->check(non_negative_number())
+      ->capture_default_str();
   cmd->add_option("--name", s.name, "Building and project name")->capture_default_str();
   cmd->add_flag("--json", o->json, "Print a JSON summary (counts, areas, room rectangles)");
   cmd->callback([o] { run_make_demo_building(*o); });

@@ -2,6 +2,8 @@
 // `plumb register SOURCE TARGET [--voxel V] [--seed S] [--json]`: global registration of two clouds
 // (voxel -> normals -> FPFH -> SAC-IA with the Huber score -> overlap-gated ICP, Liu et al. 2022,
 // sec. 1) and the resulting 4x4 T_target_source, which maps source points into the target frame.
+// A registration whose status is not "ok" still prints its result (for diagnosis), then says so on
+// stderr and exits with code 3 (kExitJobFailed): its T_target_source must not be used.
 
 #include <cmath>
 #include <cstdint>
@@ -9,11 +11,13 @@
 #include <iostream>
 #include <limits>
 #include <memory>
+#include <sstream>
 #include <string>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "cli_support.hpp"
 #include "registry.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/io/cloud_io.hpp"
@@ -81,6 +85,14 @@ void run_register(const RegisterOptions& o) {
     std::printf("time: prepare %.3f s, SAC-IA %.3f s (%d hypotheses), ICP %.3f s (%d iterations), total %.3f s\n",
                 r.seconds_prepare, r.seconds_coarse, r.coarse.iterations, r.seconds_fine, r.iterations, seconds);
   }
+  if (r.status != Status::kOk) {
+    std::ostringstream os;
+    os.precision(3);
+    os << o.source_path << " in " << o.target_path << ": registration failed (status " << to_string(r.status)
+       << ", overlap " << r.overlap << ", coarse stage " << to_string(r.coarse.status)
+       << "); the printed T_target_source is not a valid result";
+    throw JobFailed(os.str());
+  }
 }
 
 }  // namespace
@@ -91,9 +103,13 @@ void register_register_command(CLI::App& app) {
       "register", "Global registration: find SOURCE in TARGET (FPFH + SAC-IA + overlap-gated ICP); prints T_target_source");
   cmd->add_option("source", opts->source_path, "Source cloud (.pcd, .ply or KITTI .bin)")->required()->check(CLI::ExistingFile);
   cmd->add_option("target", opts->target_path, "Target cloud (.pcd, .ply or KITTI .bin)")->required()->check(CLI::ExistingFile);
+  cmd->footer(
+      "Exit codes: 0 registered (status ok); 1 unusable input (message names it); 3 the result was\n"
+      "printed but its status is not ok (stderr says which), so T_target_source must not be used;\n"
+      ">= 100 usage errors.");
   cmd->add_option("--voxel", opts->voxel, "Coarse voxel size [m] (default: 1/100 of the target's extent)")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--seed", opts->seed, "Random seed of SAC-IA (default 42)");
+      ->check(positive_number(1e4));
+  cmd->add_option("--seed", opts->seed, "Random seed of SAC-IA (default 42)")->check(non_negative_number());
   cmd->add_flag("--json", opts->json, "Print the result as JSON");
   cmd->callback([opts] { run_register(*opts); });
 }

@@ -16,6 +16,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "cli_support.hpp"
 #include "registry.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/io/cloud_io.hpp"
@@ -103,7 +104,7 @@ void register_segment_command(CLI::App& app) {
   cmd->add_option("cloud", opts->cloud_path, "Frame to segment (.pcd, .ply, .bin)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--sensor-height", opts->sensor_height,
                   "Height of the sensor above the ground [m] (default: unknown, lowest large horizontal plane)")
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number(1000.0));
   cmd->add_option("--labels-out", opts->labels_out,
                   "Write one label per input point, in input order (0 decoration, 1 ground, 2 vertical)");
   cmd->add_option("--scan-out", opts->scan_out, "Write the frame's planar scan as CSV (beam,angle,range,x,y)");

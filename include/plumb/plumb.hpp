@@ -45,6 +45,7 @@
 #include "plumb/io/carmen.hpp"
 #include "plumb/io/cloud_io.hpp"
 #include "plumb/io/frame_dump.hpp"
+#include "plumb/io/input_file.hpp"
 #include "plumb/io/kitti_bin.hpp"
 #include "plumb/io/pcd.hpp"
 #include "plumb/io/ply.hpp"

@@ -8,14 +8,6 @@
 
 namespace plumb {
 
-WheelEncoderReading WheelEncoderReading::from_ticks(double stamp, double left_ticks, double right_ticks,
-                                                    double ticks_per_revolution) {
-  PLUMB_CHECK(ticks_per_revolution > 0.0 && std::isfinite(ticks_per_revolution),
-              "WheelEncoderReading::from_ticks: ticks_per_revolution must be > 0, got " << ticks_per_revolution);
-  constexpr double kTwoPi = 6.283185307179586476925;
-  return {stamp, kTwoPi * left_ticks / ticks_per_revolution, kTwoPi * right_ticks / ticks_per_revolution};
-}
-
 std::optional<Vector2d> interpolate_wheel_angles(const std::vector<WheelEncoderReading>& readings, double t,
                                                  double max_gap) {
   if (readings.empty() || !std::isfinite(t)) return std::nullopt;

@@ -32,6 +32,7 @@ UmeyamaResult umeyama(const std::vector<Vector3d>& source, const std::vector<Vec
   }
   mean_source /= n;
   mean_target /= n;
+  PLUMB_CHECK(mean_source.allFinite() && mean_target.allFinite(), "umeyama: a point is not finite (or too large)");
 
   // Eq. 36 (variance of the source) and eq. 38 (cross-covariance target x source).
   double variance_source = 0.0;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
 
 #include "plumb/core/error.hpp"
 #include "plumb/core/lie.hpp"
@@ -51,6 +52,41 @@ std::size_t nearest(const std::vector<double>& stamps, double offset, double sta
   return best;
 }
 
+void check_finite_poses(const Trajectory& trajectory, const char* which) {
+  for (std::size_t i = 0; i < trajectory.size(); ++i) {
+    PLUMB_CHECK(trajectory.poses[i].matrix().allFinite(),
+                "associate: " << which << " pose " << i << " is not finite (NaN or infinity)");
+  }
+}
+
+void check_increasing_stamps(const Trajectory& trajectory, const char* which) {
+  for (std::size_t i = 1; i < trajectory.stamps.size(); ++i) {
+    PLUMB_CHECK(trajectory.stamps[i] > trajectory.stamps[i - 1],
+                "associate: " << which << " stamps do not strictly increase: pose " << i << " has stamp "
+                              << trajectory.stamps[i] << " after " << trajectory.stamps[i - 1] << " at pose "
+                              << i - 1);
+  }
+}
+
+void check_pair_count(std::size_t pairs, const Trajectory& shorter, const char* shorter_name,
+                      const Trajectory& longer, const AssociationSettings& settings, bool by_stamp) {
+  const double needed_share = settings.min_pair_fraction * static_cast<double>(shorter.size());
+  if (pairs >= settings.min_pairs && static_cast<double>(pairs) >= needed_share) return;
+  std::ostringstream os;
+  os.precision(10);
+  os << "associate: only " << pairs << " pose pairs " << (by_stamp ? "matched by stamp" : "paired by index")
+     << " out of the " << shorter.size() << " poses of the shorter trajectory (the " << shorter_name
+     << "); at least " << settings.min_pairs << " and " << settings.min_pair_fraction * 100.0
+     << " % of them are needed";
+  if (by_stamp) {
+    os << ". Stamps: " << shorter_name << ' ' << shorter.stamps.front() << " .. " << shorter.stamps.back()
+       << ", the other " << longer.stamps.front() << " .. " << longer.stamps.back() << " (max difference "
+       << settings.max_time_difference << " s, time offset " << settings.time_offset
+       << " s): are both in seconds on the same clock?";
+  }
+  throw Error(os.str());
+}
+
 }  // namespace
 
 ErrorStats compute_stats(const std::vector<double>& errors) {
@@ -62,7 +98,7 @@ ErrorStats compute_stats(const std::vector<double>& errors) {
   s.min = std::numeric_limits<double>::infinity();
   s.max = -std::numeric_limits<double>::infinity();
   for (double e : errors) {
-    PLUMB_CHECK(!std::isnan(e), "compute_stats: NaN error value");
+    PLUMB_CHECK(std::isfinite(e), "compute_stats: error value " << e << " is not finite");
     sum += e;
     s.sse += e * e;
     s.min = std::min(s.min, e);
@@ -89,6 +125,16 @@ AssociationResult associate(const Trajectory& estimate, const Trajectory& refere
   estimate.check_consistent("associate: estimate");
   reference.check_consistent("associate: reference");
   PLUMB_CHECK(!estimate.empty() && !reference.empty(), "associate: empty trajectory");
+  PLUMB_CHECK(std::isfinite(settings.max_time_difference) && settings.max_time_difference >= 0.0 &&
+                  std::isfinite(settings.time_offset) && std::isfinite(settings.min_pair_fraction) &&
+                  settings.min_pair_fraction >= 0.0 && settings.min_pair_fraction <= 1.0,
+              "associate: invalid settings (max_time_difference " << settings.max_time_difference
+                  << ", time_offset " << settings.time_offset << ", min_pair_fraction "
+                  << settings.min_pair_fraction << ")");
+  check_finite_poses(estimate, "estimate");
+  check_finite_poses(reference, "reference");
+  check_increasing_stamps(estimate, "estimate");
+  check_increasing_stamps(reference, "reference");
   AssociationResult result;
   if (!estimate.has_stamps() || !reference.has_stamps()) {
     PLUMB_CHECK(estimate.size() == reference.size(),
@@ -101,6 +147,7 @@ AssociationResult associate(const Trajectory& estimate, const Trajectory& refere
     result.estimate_indices.resize(estimate.size());
     for (std::size_t i = 0; i < estimate.size(); ++i) result.estimate_indices[i] = i;
     result.reference_indices = result.estimate_indices;
+    check_pair_count(estimate.size(), estimate, "estimate", reference, settings, false);
     return result;
   }
   result.by_stamp = true;
@@ -110,18 +157,16 @@ AssociationResult associate(const Trajectory& estimate, const Trajectory& refere
   const Trajectory& longer = estimate_longer ? estimate : reference;
   // Offset applied to the longer one so that it always shifts the estimate's stamps.
   const double offset = estimate_longer ? settings.time_offset : -settings.time_offset;
-  const bool sorted = std::is_sorted(longer.stamps.begin(), longer.stamps.end());
   std::vector<std::size_t>& short_ids = estimate_longer ? result.reference_indices : result.estimate_indices;
   std::vector<std::size_t>& long_ids = estimate_longer ? result.estimate_indices : result.reference_indices;
   for (std::size_t i = 0; i < shorter.size(); ++i) {
-    const std::size_t k = nearest(longer.stamps, offset, shorter.stamps[i], sorted);
+    const std::size_t k = nearest(longer.stamps, offset, shorter.stamps[i], true);
     if (std::abs(longer.stamps[k] + offset - shorter.stamps[i]) <= settings.max_time_difference) {
       short_ids.push_back(i);
       long_ids.push_back(k);
     }
   }
-  PLUMB_CHECK(!short_ids.empty(), "associate: no stamps match within " << settings.max_time_difference
-                                      << " s (time offset " << settings.time_offset << " s)");
+  check_pair_count(short_ids.size(), shorter, estimate_longer ? "reference" : "estimate", longer, settings, true);
   for (std::size_t k = 0; k < result.estimate_indices.size(); ++k) {
     const std::size_t ie = result.estimate_indices[k];
     const std::size_t ir = result.reference_indices[k];

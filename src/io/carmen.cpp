@@ -10,11 +10,19 @@
 #include <zlib.h>
 
 #include "plumb/core/error.hpp"
+#include "detail_cloud_io.hpp"
 
 namespace plumb::io {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+
+/// Largest beam or remission count a message may declare.
+constexpr double kMaxCount = 1e6;
+/// Most fields a message can have: ROBOTLASER1 with kMaxCount beams and as many remissions plus its
+/// 24 other fields. Lines are split only up to this, so a line of millions of tokens costs no more
+/// memory than the largest valid message (each field is a 16-byte view of the text).
+constexpr std::size_t kMaxFields = 2 * static_cast<std::size_t>(kMaxCount) + 24;
 
 bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
 
@@ -29,7 +37,12 @@ class Fields {
       while (i < line.size() && is_space(line[i])) ++i;
       const std::size_t start = i;
       while (i < line.size() && !is_space(line[i])) ++i;
-      if (i > start) tokens_.push_back(line.substr(start, i - start));
+      if (i > start) {
+        PLUMB_CHECK(tokens_.size() < kMaxFields, name_ << ":" << line_ << ": " << tokens_.front()
+                                                       << ": more than " << kMaxFields
+                                                       << " fields, more than any CARMEN message has");
+        tokens_.push_back(line.substr(start, i - start));
+      }
     }
   }
 
@@ -73,7 +86,7 @@ class Fields {
 
   std::size_t count(std::size_t i, const char* what) const {
     const double v = finite(i);
-    PLUMB_CHECK(v >= 0.0 && v == std::floor(v) && v <= 1e6,
+    PLUMB_CHECK(v >= 0.0 && v == std::floor(v) && v <= kMaxCount,
                 name_ << ":" << line_ << ": " << type() << ": bad " << what << " '" << tokens_[i]
                       << "' at field " << i + 1);
     return static_cast<std::size_t>(v);
@@ -148,9 +161,16 @@ void parse_line(std::string_view line, std::size_t line_number, const std::strin
                 const CarmenReadSettings& settings, CarmenLog& log) {
   while (!line.empty() && is_space(line.front())) line.remove_prefix(1);
   if (line.empty() || line.front() == '#') return;
+  std::size_t type_end = 0;
+  while (type_end < line.size() && !is_space(line[type_end])) ++type_end;
+  const std::string_view type = line.substr(0, type_end);
+  const bool laser_message = type == "FLASER" || type.substr(0, 8) == "RAWLASER" || type == "ROBOTLASER1";
+  if (!laser_message && type != "ODOM" && type != "PARAM") {
+    ++log.num_skipped;  // NEFF, RLASER, SYNC, TRUEPOS, ...: not split, whatever their length
+    return;
+  }
   const Fields f(line, name, line_number);
-  const std::string_view type = f.type();
-  if (type == "FLASER" || type.substr(0, 8) == "RAWLASER" || type == "ROBOTLASER1") {
+  if (laser_message) {
     CarmenLaser laser;
     laser.line = line_number;
     laser.num_odometry_before = log.odometry.size();
@@ -178,11 +198,9 @@ void parse_line(std::string_view line, std::size_t line_number, const std::strin
     } else {
       log.odometry.push_back(odom);
     }
-  } else if (type == "PARAM") {
+  } else {
     f.need(1, 2, "a name and a value");
     log.params[std::string(f.token(1))] = std::string(f.token(2));
-  } else {
-    ++log.num_skipped;  // NEFF, RLASER, SYNC, TRUEPOS, ...
   }
 }
 
@@ -202,22 +220,65 @@ CarmenLog parse_carmen(const std::string& text, const std::string& name,
   return log;
 }
 
-CarmenLog read_carmen(const std::string& path, const CarmenReadSettings& settings) {
-  // gzopen reads plain files transparently.
-  gzFile file = gzopen(path.c_str(), "rb");
-  PLUMB_CHECK(file != nullptr, path << ": cannot open file");
+namespace {
+
+bool is_gzip(const char* data, std::size_t size) {
+  return size >= 2 && static_cast<unsigned char>(data[0]) == 0x1f && static_cast<unsigned char>(data[1]) == 0x8b;
+}
+
+/// Inflate every gzip member of `data` in turn, as gzread() does.
+std::string gunzip(const char* data, std::size_t size, const std::string& name) {
+  z_stream z{};
+  PLUMB_CHECK(inflateInit2(&z, 16 + MAX_WBITS) == Z_OK, name << ": cannot initialise zlib");
   std::string text;
-  std::vector<char> buffer(1 << 16);
-  int n = 0;
-  while ((n = gzread(file, buffer.data(), static_cast<unsigned>(buffer.size()))) > 0) {
-    text.append(buffer.data(), static_cast<std::size_t>(n));
+  std::vector<char> out(1 << 16);
+  std::size_t consumed = 0;  // input bytes handed to zlib so far
+  std::string error;
+  for (;;) {
+    if (z.avail_in == 0 && consumed < size) {
+      // avail_in is 32 bits wide: feed inputs of 4 GiB and more in pieces.
+      const std::size_t piece = std::min<std::size_t>(size - consumed, 1u << 30);
+      z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(data + consumed));
+      z.avail_in = static_cast<uInt>(piece);
+      consumed += piece;
+    }
+    z.next_out = reinterpret_cast<Bytef*>(out.data());
+    z.avail_out = static_cast<uInt>(out.size());
+    const int ret = inflate(&z, Z_NO_FLUSH);
+    text.append(out.data(), out.size() - z.avail_out);
+    if (ret == Z_STREAM_END) {
+      const std::size_t rest = z.avail_in + (size - consumed);
+      const std::size_t at = size - rest;
+      if (!is_gzip(data + at, rest)) break;  // the end, or trailing bytes gzread() ignores too
+      inflateReset(&z);
+      continue;
+    }
+    if (ret == Z_OK) continue;
+    if (ret == Z_BUF_ERROR && z.avail_in == 0 && consumed == size) {
+      error = "unexpected end of the gzip data (truncated file?)";
+    } else {
+      error = z.msg != nullptr ? z.msg : "zlib error " + std::to_string(ret);
+    }
+    break;
   }
-  int err = Z_OK;
-  const char* message = n < 0 ? gzerror(file, &err) : nullptr;
-  const std::string error_text = message != nullptr ? message : "";
-  gzclose(file);
-  PLUMB_CHECK(n == 0, path << ": read error after " << text.size() << " bytes: " << error_text);
-  return parse_carmen(text, path, settings);
+  const std::size_t at = size - (z.avail_in + (size - consumed));
+  inflateEnd(&z);
+  PLUMB_CHECK(error.empty(), name << ": gzip byte " << at << ": " << error << " (after " << text.size()
+                                  << " bytes of text)");
+  return text;
+}
+
+}  // namespace
+
+CarmenLog read_carmen_buffer(const char* data, std::size_t size, const std::string& name,
+                             const CarmenReadSettings& settings) {
+  if (is_gzip(data, size)) return parse_carmen(gunzip(data, size, name), name, settings);
+  return parse_carmen(std::string(data, size), name, settings);
+}
+
+CarmenLog read_carmen(const std::string& path, const CarmenReadSettings& settings) {
+  const std::vector<char> data = cloud_detail::slurp_file(path);
+  return read_carmen_buffer(data.data(), data.size(), path, settings);
 }
 
 Pose2 interpolate_pose2(const Pose2& a, const Pose2& b, double alpha) {

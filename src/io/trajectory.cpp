@@ -4,49 +4,59 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <sstream>
 #include <string_view>
 #include <system_error>
 
 #include <Eigen/SVD>
 
 #include "plumb/core/error.hpp"
+#include "plumb/io/input_file.hpp"
 
 namespace plumb::io {
 namespace {
 
 bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
 
-/// One line of a text file with its 1-based number, trimmed; comment and blank lines are skipped.
+/// One line of a text with its 1-based number, trimmed; comment and blank lines are skipped.
 class LineReader {
  public:
-  explicit LineReader(const std::string& path) : path_(path), in_(path, std::ios::binary) {
-    PLUMB_CHECK(in_.is_open(), path << ": cannot open file");
-  }
+  LineReader(const std::string& text, const std::string& name) : name_(name), text_(text) {}
 
-  /// Next data line (trimmed, not blank, not a comment); false at the end of the file.
+  /// Next data line (trimmed, not blank, not a comment); false at the end of the text.
   bool next(std::string_view& line) {
-    while (std::getline(in_, buffer_)) {
+    while (pos_ < text_.size()) {
+      std::size_t end = text_.find('\n', pos_);
+      if (end == std::string_view::npos) end = text_.size();
+      std::string_view view = text_.substr(pos_, end - pos_);
+      pos_ = end + 1;
       ++line_number_;
-      std::string_view view(buffer_);
       while (!view.empty() && is_space(view.front())) view.remove_prefix(1);
       while (!view.empty() && is_space(view.back())) view.remove_suffix(1);
       if (view.empty() || view.front() == '#') continue;
       line = view;
       return true;
     }
-    PLUMB_CHECK(!in_.bad(), path_ << ": read error after line " << line_number_);
     return false;
   }
 
-  int line_number() const { return line_number_; }
-  const std::string& path() const { return path_; }
+  std::size_t line_number() const { return line_number_; }
+  const std::string& path() const { return name_; }
 
  private:
-  std::string path_;
-  std::ifstream in_;
-  std::string buffer_;
-  int line_number_ = 0;
+  const std::string& name_;
+  std::string_view text_;
+  std::size_t pos_ = 0;
+  std::size_t line_number_ = 0;
 };
+
+std::string read_text(const std::string& path) {
+  std::ifstream in = open_input_file(path);  // names a directory or a missing file as such
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  PLUMB_CHECK(!in.bad(), path << ": read error");
+  return buffer.str();
+}
 
 /// Split on spaces, tabs and commas and parse every field as a finite double.
 std::vector<double> parse_fields(std::string_view line, const LineReader& reader) {
@@ -79,6 +89,34 @@ void check_field_count(const std::vector<double>& values, std::size_t expected, 
                                                        << values.size());
 }
 
+/// Stamps must increase line by line (when the settings ask for it); remembers the last one.
+class StampOrder {
+ public:
+  explicit StampOrder(const TrajectoryReadSettings& settings) : enabled_(settings.require_increasing_stamps) {}
+
+  void check(double stamp, const LineReader& reader) {
+    PLUMB_CHECK(!enabled_ || previous_line_ == 0 || stamp > previous_,
+                reader.path() << ':' << reader.line_number() << ": stamp " << stamp
+                              << (stamp == previous_ ? " repeats" : " is earlier than")
+                              << " the stamp of line " << previous_line_ << " (" << previous_
+                              << "); stamps must strictly increase");
+    previous_ = stamp;
+    previous_line_ = reader.line_number();
+  }
+
+ private:
+  bool enabled_;
+  double previous_ = 0.0;
+  std::size_t previous_line_ = 0;
+};
+
+void check_position(const Eigen::Vector3d& p, const TrajectoryReadSettings& settings, const LineReader& reader) {
+  PLUMB_CHECK(p.cwiseAbs().maxCoeff() <= settings.max_abs_coordinate,
+              reader.path() << ':' << reader.line_number() << ": position (" << p.x() << ", " << p.y() << ", "
+                            << p.z() << ") is beyond " << settings.max_abs_coordinate
+                            << " m from the origin (not a plausible coordinate in metres)");
+}
+
 // Shortest decimal text that parses back to the same double.
 void append_double(std::string& out, double value) {
   char buffer[32];
@@ -98,12 +136,19 @@ void write_text(const std::string& path, const std::string& text) {
 }  // namespace
 
 Trajectory read_tum(const std::string& path, const TrajectoryReadSettings& settings) {
-  LineReader reader(path);
+  return parse_tum(read_text(path), path, settings);
+}
+
+Trajectory parse_tum(const std::string& text, const std::string& path, const TrajectoryReadSettings& settings) {
+  LineReader reader(text, path);
+  StampOrder order(settings);
   Trajectory trajectory;
   std::string_view line;
   while (reader.next(line)) {
     const std::vector<double> v = parse_fields(line, reader);
     check_field_count(v, 8, "stamp tx ty tz qx qy qz qw", reader);
+    order.check(v[0], reader);
+    check_position(Eigen::Vector3d(v[1], v[2], v[3]), settings, reader);
     Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);  // (w, x, y, z)
     const double norm = q.norm();
     PLUMB_CHECK(std::abs(norm - 1.0) <= settings.max_quaternion_norm_error,
@@ -140,13 +185,20 @@ void write_tum(const Trajectory& trajectory, const std::string& path) {
   write_text(path, text);
 }
 
-std::vector<double> read_times(const std::string& path) {
-  LineReader reader(path);
+std::vector<double> read_times(const std::string& path, const TrajectoryReadSettings& settings) {
+  return parse_times(read_text(path), path, settings);
+}
+
+std::vector<double> parse_times(const std::string& text, const std::string& path,
+                                const TrajectoryReadSettings& settings) {
+  LineReader reader(text, path);
+  StampOrder order(settings);
   std::vector<double> stamps;
   std::string_view line;
   while (reader.next(line)) {
     const std::vector<double> v = parse_fields(line, reader);
     check_field_count(v, 1, "one stamp per line", reader);
+    order.check(v[0], reader);
     stamps.push_back(v[0]);
   }
   PLUMB_CHECK(!stamps.empty(), path << ": no stamps in file (empty or only comments)");
@@ -155,12 +207,24 @@ std::vector<double> read_times(const std::string& path) {
 
 Trajectory read_kitti(const std::string& path, const std::string& times_path,
                       const TrajectoryReadSettings& settings) {
-  LineReader reader(path);
+  Trajectory trajectory = parse_kitti(read_text(path), path, settings);
+  if (!times_path.empty()) {
+    trajectory.stamps = read_times(times_path, settings);
+    PLUMB_CHECK(trajectory.stamps.size() == trajectory.poses.size(),
+                times_path << ": " << trajectory.stamps.size() << " stamps for the " << trajectory.poses.size()
+                           << " poses of " << path);
+  }
+  return trajectory;
+}
+
+Trajectory parse_kitti(const std::string& text, const std::string& path, const TrajectoryReadSettings& settings) {
+  LineReader reader(text, path);
   Trajectory trajectory;
   std::string_view line;
   while (reader.next(line)) {
     const std::vector<double> v = parse_fields(line, reader);
     check_field_count(v, 12, "row-major 3x4 [R|t]", reader);
+    check_position(Eigen::Vector3d(v[3], v[7], v[11]), settings, reader);
     Eigen::Matrix3d R;
     R << v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10];
     const double error = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
@@ -180,12 +244,6 @@ Trajectory read_kitti(const std::string& path, const std::string& times_path,
     trajectory.poses.push_back(T);
   }
   PLUMB_CHECK(!trajectory.empty(), path << ": no poses in file (empty or only comments)");
-  if (!times_path.empty()) {
-    trajectory.stamps = read_times(times_path);
-    PLUMB_CHECK(trajectory.stamps.size() == trajectory.poses.size(),
-                times_path << ": " << trajectory.stamps.size() << " stamps for the " << trajectory.poses.size()
-                           << " poses of " << path);
-  }
   return trajectory;
 }
 

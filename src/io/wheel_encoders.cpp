@@ -82,9 +82,16 @@ std::vector<WheelEncoderReading> parse_wheel_encoders(const std::string& text, c
     PLUMB_CHECK(out.empty() || v[0] > out.back().stamp,
                 name << ":" << line_number << ": stamp " << v[0] << " does not increase (previous "
                      << out.back().stamp << ")");
-    out.push_back(settings.ticks_per_revolution > 0.0
-                      ? WheelEncoderReading::from_ticks(v[0], v[1], v[2], settings.ticks_per_revolution)
-                      : WheelEncoderReading{v[0], v[1], v[2]});
+    const WheelEncoderReading reading =
+        settings.ticks_per_revolution > 0.0
+            ? WheelEncoderReading::from_ticks(v[0], v[1], v[2], settings.ticks_per_revolution)
+            : WheelEncoderReading{v[0], v[1], v[2]};
+    // 2 pi ticks / ticks_per_revolution overflows for counts near the largest double.
+    PLUMB_CHECK(std::isfinite(reading.left) && std::isfinite(reading.right),
+                name << ":" << line_number << ": tick counts (" << v[1] << ", " << v[2]
+                     << ") are too large to convert to angles at " << settings.ticks_per_revolution
+                     << " ticks per revolution");
+    out.push_back(reading);
   }
   PLUMB_CHECK(!out.empty(), name << ": no wheel encoder reading");
   return out;

@@ -58,7 +58,8 @@ TEST_F(CliTest, RegisterReportsTinyCloudsAndRejectsBadFiles) {
   const std::string path = test::temp_path("register_cli_two.pcd");
   io::write_cloud(path, two);
   const RunResult r = test::run_cli("register '" + path + "' '" + path + "' --json");
-  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // The result is printed, but a failed status is exit code 3, not success.
+  ASSERT_EQ(r.exit_code, 3) << r.err;
   EXPECT_EQ(nlohmann::json::parse(r.out).at("status"), "insufficient_data");
   EXPECT_NE(test::run_cli("register /nonexistent.pcd '" + path + "'").exit_code, 0);
   EXPECT_NE(test::run_cli("register '" + path + "'").exit_code, 0);

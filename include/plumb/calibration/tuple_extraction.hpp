@@ -14,12 +14,14 @@
 /// refuses, give no tuple and are counted; so do pairs whose wheel speeds change within the
 /// interval (the tuple model assumes constant speeds).
 
+#include <cmath>
 #include <cstddef>
 #include <functional>
 #include <optional>
 #include <vector>
 
 #include "plumb/calibration/odometry_laser.hpp"
+#include "plumb/core/error.hpp"
 #include "plumb/core/status.hpp"
 #include "plumb/scan2d/laser_scan.hpp"
 #include "plumb/scan2d/plicp.hpp"
@@ -34,8 +36,14 @@ struct WheelEncoderReading {
 
   /// @brief A reading from tick counters: angle = 2π ticks / ticks_per_revolution.
   /// @throws plumb::Error when ticks_per_revolution <= 0.
+  /// @note Defined here so that the wheel-encoder reader (io) needs no calibration object code.
   static WheelEncoderReading from_ticks(double stamp, double left_ticks, double right_ticks,
-                                        double ticks_per_revolution);
+                                        double ticks_per_revolution) {
+    PLUMB_CHECK(ticks_per_revolution > 0.0 && std::isfinite(ticks_per_revolution),
+                "WheelEncoderReading::from_ticks: ticks_per_revolution must be > 0, got " << ticks_per_revolution);
+    constexpr double kTwoPi = 6.283185307179586476925;
+    return {stamp, kTwoPi * left_ticks / ticks_per_revolution, kTwoPi * right_ticks / ticks_per_revolution};
+  }
 };
 
 /// @brief A scan matcher: the pose of `current`'s laser frame in `reference`'s laser frame, or

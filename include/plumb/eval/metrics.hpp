@@ -28,13 +28,20 @@ struct ErrorStats {
 };
 
 /// @brief Statistics of `errors`.
-/// @throws plumb::Error when `errors` is empty or holds a NaN.
+/// @throws plumb::Error when `errors` is empty or holds a NaN or an infinity.
 ErrorStats compute_stats(const std::vector<double>& errors);
 
 /// @brief How two trajectories are paired pose by pose.
 struct AssociationSettings {
   double max_time_difference = 0.01;  ///< largest accepted |stamp_est - stamp_ref| [s] (evo's default)
   double time_offset = 0.0;           ///< added to the estimate's stamps before matching [s]
+  /// Fewest pose pairs accepted: fewer cannot be aligned (SE(3) needs 3 non-collinear positions)
+  /// and give no meaningful statistics.
+  std::size_t min_pairs = 3;
+  /// Fewest pose pairs accepted, as a share of the shorter trajectory's poses: a lower share means
+  /// the two barely overlap in time or their stamps are in different units or clocks (ms against
+  /// s), and errors over the few chance matches would look valid. 0 disables the check.
+  double min_pair_fraction = 0.5;
 };
 
 /// @brief Two trajectories cut to the associated poses, pose i of one with pose i of the other.
@@ -53,7 +60,11 @@ struct AssociationResult {
 /// `associate_trajectories`; a pose of the longer trajectory may be used twice). Otherwise the two
 /// must have the same size and are paired by index (KITTI without times files); a trajectory
 /// without stamps then takes the other's stamps.
-/// @throws plumb::Error when stamps are missing and sizes differ, or nothing could be associated.
+/// @throws plumb::Error when stamps are missing and sizes differ; when stamps are present but do
+///         not strictly increase (the message names the pose); when a pose is not finite; or when
+///         fewer pairs than AssociationSettings::min_pairs or min_pair_fraction of the shorter
+///         trajectory are found (the message gives both counts and the stamp ranges). Messages
+///         start with "associate:"; callers add the file names.
 AssociationResult associate(const Trajectory& estimate, const Trajectory& reference,
                             const AssociationSettings& settings = {});
 
@@ -78,7 +89,10 @@ struct ApeResult {
   ErrorSeries rotation_deg;  ///< [deg]
   ErrorSeries full;          ///< unit-less
   UmeyamaResult alignment;   ///< the similarity applied to the estimate (identity for kNone)
-  Status status = Status::kOk;  ///< the alignment's status (kDegenerate for a straight-line path)
+  /// The alignment's status: kDegenerate for (nearly) collinear positions, kInsufficientData for
+  /// a single pose. The errors are still computed, but with an arbitrary rotation about the line:
+  /// callers should refuse them (or use AlignMode::kNone).
+  Status status = Status::kOk;
 };
 
 /// @brief APE of `estimate` against `reference` (same size, pose i with pose i; see associate()).

@@ -89,6 +89,13 @@ struct CarmenReadSettings {
 ///         be opened or read.
 CarmenLog read_carmen(const std::string& path, const CarmenReadSettings& settings = {});
 
+/// @brief read_carmen() on the bytes of a file held in memory, plain text or gzip (one or more
+///        members, as `cat a.gz b.gz` makes; bytes after the last member that do not start another
+///        one are ignored, as gzread() does); `name` stands for the path in messages.
+/// @throws plumb::Error as read_carmen(); for corrupt or truncated gzip data, naming `name`.
+CarmenLog read_carmen_buffer(const char* data, std::size_t size, const std::string& name,
+                             const CarmenReadSettings& settings = {});
+
 /// @brief Parse CARMEN log text held in memory; `name` is used in error messages.
 /// @throws plumb::Error as read_carmen().
 CarmenLog parse_carmen(const std::string& text, const std::string& name = "<carmen>",

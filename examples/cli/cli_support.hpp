@@ -1,0 +1,115 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+// Shared pieces of the `plumb` subcommands: numeric option checks that reject NaN and infinity
+// (CLI11's own PositiveNumber / Range let NaN through and print their bounds with 309 digits), and
+// the exit code of a job that ran to the end but failed.
+
+#include <cmath>
+#include <cstddef>
+#include <cstdlib>
+#include <iostream>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "plumb/core/error.hpp"
+
+namespace plumb::cli {
+
+/// Exit code of a subcommand that ran to the end and wrote its outputs, but whose result failed
+/// (e.g. a registration that did not converge); see main.cpp for the whole scheme.
+constexpr int kExitJobFailed = 3;
+
+/// Thrown by a subcommand whose job ran but failed; main() prints the message and exits with
+/// kExitJobFailed instead of 1.
+class JobFailed : public plumb::Error {
+ public:
+  explicit JobFailed(const std::string& what) : plumb::Error(what) {}
+};
+
+/// A finite number in [lo, hi] (or (lo, hi] when `lo_open`); either bound may be infinite. CLI11
+/// prefixes the message with the option's name. Integer options can use it too: CLI11 still
+/// rejects a fraction when it converts the value.
+inline CLI::Validator finite_number(double lo = -std::numeric_limits<double>::infinity(),
+                                    double hi = std::numeric_limits<double>::infinity(), bool lo_open = false) {
+  std::ostringstream description;
+  description << "finite";
+  if (std::isfinite(lo) && std::isfinite(hi)) {
+    description << ' ' << (lo_open ? '(' : '[') << lo << ", " << hi << ']';
+  } else if (std::isfinite(lo)) {
+    description << (lo_open ? " > " : " >= ") << lo;
+  } else if (std::isfinite(hi)) {
+    description << " <= " << hi;
+  }
+  return CLI::Validator(
+      [lo, hi, lo_open](std::string& input) -> std::string {
+        const char* begin = input.c_str();
+        char* end = nullptr;
+        const double value = std::strtod(begin, &end);
+        std::ostringstream message;
+        if (end == begin || *end != '\0') {
+          message << "'" << input << "' is not a number";
+        } else if (!std::isfinite(value)) {  // also an overflow such as 1e400
+          message << "'" << input << "' is not a finite number";
+        } else if (lo_open ? !(value > lo) : !(value >= lo)) {
+          message << input << " must be " << (lo_open ? "> " : ">= ") << lo;
+        } else if (!(value <= hi)) {
+          message << input << " must be <= " << hi;
+        }
+        return message.str();
+      },
+      description.str());
+}
+
+/// A finite number > 0 and <= hi.
+inline CLI::Validator positive_number(double hi = std::numeric_limits<double>::infinity()) {
+  return finite_number(0.0, hi, true);
+}
+
+/// A finite number >= 0 and <= hi.
+inline CLI::Validator non_negative_number(double hi = std::numeric_limits<double>::infinity()) {
+  return finite_number(0.0, hi, false);
+}
+
+}  // namespace plumb::cli
+
+namespace plumb::cli {
+
+/// Which of `count` records to keep so that their stamps strictly increase: a record whose stamp
+/// is not greater than the last kept one is dropped, with a warning on stderr naming `path:line`
+/// (the first few individually, then a count). Laser logs do carry such stamps (a clock stepped
+/// back while logging); dropping the few scans keeps the rest usable, where refusing the whole
+/// log would not, and the output stays ordered in time.
+template <typename StampOf, typename LineOf>
+std::vector<std::size_t> indices_with_increasing_stamps(const std::string& path, std::size_t count,
+                                                        StampOf stamp_of, LineOf line_of, const char* what) {
+  constexpr std::size_t kMaxWarnings = 5;
+  std::vector<std::size_t> kept;
+  kept.reserve(count);
+  std::size_t dropped = 0;
+  for (std::size_t k = 0; k < count; ++k) {
+    if (kept.empty() || stamp_of(k) > stamp_of(kept.back())) {
+      kept.push_back(k);
+      continue;
+    }
+    if (++dropped <= kMaxWarnings) {
+      std::ostringstream os;
+      os.precision(15);
+      os << "plumb: warning: " << path << ':' << line_of(k) << ": " << what << " stamp " << stamp_of(k)
+         << " does not increase over " << stamp_of(kept.back()) << " (line " << line_of(kept.back())
+         << "); " << what << " dropped\n";
+      std::cerr << os.str();
+    }
+  }
+  if (dropped > kMaxWarnings) {
+    std::cerr << "plumb: warning: " << path << ": " << dropped << ' ' << what
+              << "s dropped in all because their stamps did not increase\n";
+  }
+  return kept;
+}
+
+}  // namespace plumb::cli
