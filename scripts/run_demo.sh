@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: BSD-3-Clause
 # The demo's steps on an existing build: what README command 1 (scripts/demo.sh) shows a new user,
 # and what CI (scripts/test.sh) runs on its own release build, so the two cannot drift apart.
-#   scripts/run_demo.sh BUILD_DIR [OUT_DIR]      (OUT_DIR defaults to BUILD_DIR/demo)
+#   scripts/run_demo.sh BUILD_DIR [OUT_DIR]      (OUT_DIR defaults to BUILD_DIR/demo, made afresh)
 # Every step must exit 0; the script ends with the demo's accuracy table and its trajectory.svg.
 set -euo pipefail
 if [ $# -lt 1 ] || [ $# -gt 2 ]; then
@@ -10,14 +10,22 @@ if [ $# -lt 1 ] || [ $# -gt 2 ]; then
   exit 2
 fi
 build="$1"
-out="${2:-$build/demo}"
+if [ $# -eq 2 ]; then
+  out="$2"
+else
+  # The default output lives in the build tree, which is ours: start it afresh (plumb demo refuses
+  # a directory holding anything it did not write itself).
+  out="$build/demo"
+  rm -rf "$out"
+fi
 plumb="$build/examples/plumb"
 if [ ! -x "$plumb" ]; then
   echo "run_demo.sh: $plumb not found (build with -DPLUMB_BUILD_EXAMPLES=ON)" >&2
   exit 1
 fi
 threads="$(nproc)"
-mkdir -p "$out"
+log="$(mktemp)"
+trap 'rm -f "$log"' EXIT
 
 echo
 echo "== plumb --help"
@@ -32,7 +40,7 @@ echo "== plumb_example_01_cloud_basics (clouds, voxel grid, kd-tree, PCD, SE(2) 
 # odometry and prints the accuracy table against the exact ground truth (trajectory.svg beside it).
 echo
 echo "== plumb demo -o $out"
-"$plumb" demo -o "$out" --threads "$threads" | tee "$out/demo.log"
+"$plumb" demo -o "$out" --threads "$threads" | tee "$log"
 
 # The same job written as a robot's own loop with the library: the demo's model and frame dump fed
 # one frame at a time into BimLocalizer and BimOdometry.
@@ -41,8 +49,8 @@ echo "== plumb_example_02_bim_odometry $out/demo_office.ifc $out/dump"
 "$build/examples/plumb_example_02_bim_odometry" "$out/demo_office.ifc" "$out/dump"
 
 echo
-echo "== the demo's result (from $out/demo.log)"
-sed -n '/BIM-corrected odometry done/,$p' "$out/demo.log" | sed '1d'
+echo "== the demo's result"
+sed -n '/BIM-corrected odometry done/,$p' "$log" | sed '1d'
 svg="$out/run/trajectory.svg"
 if [ ! -s "$svg" ]; then
   echo "run_demo.sh: $svg was not written" >&2

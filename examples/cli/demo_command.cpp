@@ -5,7 +5,8 @@
 // localizes the first frame in the model (BimLocalizer, no hint; --surveyed-start starts at the
 // true pose instead), runs the BIM-corrected odometry and prints the error table of Liu et al. 2022,
 // Table 2 (wheel odometry, LiDAR without BIM, BIM-corrected) against the exact ground truth.
-// DIR receives demo_office.ifc, dump/ (the frame dump) and run/ (what `plumb run` writes).
+// DIR receives demo_office.ifc, dump/ (the frame dump) and run/ (what `plumb run` writes). A DIR that
+// an earlier `plumb demo` filled is replaced; one holding anything else is refused (OutputDir).
 
 #include <chrono>
 #include <algorithm>
@@ -44,10 +45,14 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 void run_demo(const DemoCommandOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
-  const std::string model_path = o.out_dir + "/demo_office.ifc";
-  const std::string dump_dir = o.out_dir + "/dump";
+  // Checked before any work; each part is staged and moved into place when it is complete. The
+  // dump and run directories follow the same rule inside DIR (their own files only).
+  OutputDir top(o.out_dir, "demo", {"demo_office.ifc"}, false, true, {"dump", "run"});
+  const std::string model_path = top.staging() + "/demo_office.ifc";
+  OutputDir dump_out(o.out_dir + "/dump", "simulate", frame_dump_names(), false, true);
+  OutputDir run_out(o.out_dir + "/run", "run", run_output_names(), false, true);
+  const std::string dump_dir = dump_out.staging();
   const std::string run_dir = o.out_dir + "/run";
-  std::filesystem::create_directories(o.out_dir);
   const int threads = o.threads > 0 ? o.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   auto say = [&](const std::string& text) {
     if (!o.json) std::printf("[%5.1f s] %s\n", seconds_since(t0), text.c_str());
@@ -57,7 +62,7 @@ void run_demo(const DemoCommandOptions& o) {
   bim::DemoBuildingSettings building;
   building.file_name = "demo_office.ifc";
   const bim::DemoBuildingResult b = bim::write_demo_building(model_path, building);
-  say("wrote " + model_path + " (" + std::to_string(b.num_walls) + " walls, " + std::to_string(b.num_doors) +
+  say("wrote " + o.out_dir + "/demo_office.ifc (" + std::to_string(b.num_walls) + " walls, " + std::to_string(b.num_doors) +
       " doors, " + std::to_string(b.num_windows) + " windows)");
   const bim::BimMesh mesh = bim::build_mesh(bim::read_ifc(model_path));
 
@@ -66,13 +71,13 @@ void run_demo(const DemoCommandOptions& o) {
   s.loops = o.loops;
   s.length = o.length;
   s.num_threads = threads;
-  s.dump.overwrite = true;
+  s.dump.overwrite = false;  // the staging directory is new
   s.model_name = "demo_office.ifc";
   if (!o.json) s.progress = terminal_progress("simulate");
   const sim::ScenarioResult sr = sim::simulate_scenario(mesh, dump_dir, s);
   char line[256];
   std::snprintf(line, sizeof(line), "simulated %zu %s frames, %.1f m driven in %.1f s of robot time -> %s",
-                sr.num_frames, s.lidar.name.c_str(), sr.path_length, sr.duration, dump_dir.c_str());
+                sr.num_frames, s.lidar.name.c_str(), sr.path_length, sr.duration, dump_out.dir().c_str());
   say(line);
 
   const io::FrameDumpReader dump(dump_dir);
@@ -82,9 +87,15 @@ void run_demo(const DemoCommandOptions& o) {
   if (o.surveyed_start) rs.initial_pose = dump.ground_truth().poses.front();
   if (!o.json) rs.progress = terminal_progress("plumb run");
   const RunReport r = run_bim_odometry(dump, mesh, rs);
+  print_warnings(r.warnings);
   const nlohmann::json j = run_report_json(r);
-  write_run_outputs(r, j, mesh, dump, run_dir, "plumb demo: demo office, " + std::to_string(sr.num_frames) + " frames",
-                    model_path);
+  write_run_outputs(r, j, mesh, dump, run_out.staging(),
+                    "plumb demo: demo office, " + std::to_string(sr.num_frames) + " frames", "demo_office.ifc");
+  // All three parts at the end, so that a failure leaves the previous demo as it was.
+  dump_out.commit();
+  run_out.commit();
+  top.commit();
+  PLUMB_CHECK(!r.partial, "plumb demo: the run stopped at " << r.error << "; partial results in " << run_dir);
   if (o.json) {
     nlohmann::json all = j;
     all["simulation"] = {{"frames", sr.num_frames}, {"path_length", sr.path_length}, {"seconds", sr.wall_seconds}};

@@ -2,6 +2,9 @@
 // `plumb run DIR --bim MODEL.ifc -o OUT [--json]`: the BIM-corrected odometry over a frame dump.
 // Writes OUT/wheel.tum, OUT/lidar.tum, OUT/bim.tum (BIM frame, frame stamps), OUT/report.json and
 // OUT/trajectory.svg; with ground truth in the dump, prints the error table of Liu et al. 2022, Table 2.
+// OUT is checked before any work and the set is replaced as a whole (OutputDir, run_output.hpp): a
+// directory with files plumb did not write is refused unless --overwrite. A frame failing after
+// others were processed still writes the set, report.json saying "partial": true, and exits 1.
 
 #include <iostream>
 #include <memory>
@@ -25,6 +28,7 @@ struct RunOptions {
   bool json = false;
   bool no_bim = false;
   bool gt_start = false;
+  bool overwrite = false;
   std::size_t max_frames = 0;
   std::size_t correct_every = 1;
   std::vector<double> start_hint;
@@ -33,6 +37,8 @@ struct RunOptions {
 
 void run(const RunOptions& o) {
   const io::FrameDumpReader dump(o.dump_dir);
+  // Before the work: an unwritable or foreign output directory is found now, not after the last frame.
+  OutputDir out(o.out_dir, "run", run_output_names(), o.overwrite, true);
   const bim::BimMesh mesh = bim::build_mesh(bim::read_ifc(o.model));
   RunSettings settings;
   settings.max_frames = o.max_frames;
@@ -48,14 +54,19 @@ void run(const RunOptions& o) {
   }
   if (!o.json) settings.progress = terminal_progress("plumb run");
   const RunReport r = run_bim_odometry(dump, mesh, settings);
+  print_warnings(r.warnings);
   const nlohmann::json j = run_report_json(r);
-  write_run_outputs(r, j, mesh, dump, o.out_dir, "plumb run: " + o.dump_dir, o.model);
+  write_run_outputs(r, j, mesh, dump, out.staging(), "plumb run: " + o.dump_dir, o.model);
+  out.commit();
   if (o.json) {
     std::cout << j.dump(2) << '\n';
-    return;
+  } else {
+    print_run_summary(r);
+    std::printf("wrote %s/{wheel,lidar,bim}.tum, report.json, trajectory.svg\n", o.out_dir.c_str());
   }
-  print_run_summary(r);
-  std::printf("wrote %s/{wheel,lidar,bim}.tum, report.json, trajectory.svg\n", o.out_dir.c_str());
+  PLUMB_CHECK(!r.partial, o.dump_dir << ": stopped at " << r.error << "; wrote the " << r.frames.size() << " of "
+                                     << r.frames_requested << " frames processed to " << o.out_dir
+                                     << " (report.json: \"partial\": true)");
 }
 
 }  // namespace
@@ -75,7 +86,11 @@ void register_run_command(CLI::App& app) {
   cmd->add_option("--start-hint-radius", o->start_hint_radius, "How far from --start-hint the robot may be [m]")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  cmd->add_option("--max-frames", o->max_frames, "Process only the first N frames");
+  // Unsigned: the check rejects "-3", which would otherwise wrap to a huge count.
+  cmd->add_option("--max-frames", o->max_frames, "Process only the first N frames (0 = all)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--overwrite", o->overwrite,
+                "Write into a directory holding files plumb did not write (plumb's run files in it are replaced)");
   cmd->add_option("--correct-every", o->correct_every, "BIM correction every k-th frame")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();

@@ -3,9 +3,12 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <system_error>
 
 #include "plumb/bim/sample.hpp"
 #include "plumb/core/error.hpp"
@@ -23,11 +26,177 @@ nlohmann::json pose_json(const Eigen::Isometry3d& T) {
 
 double percent(double error, double distance) { return distance > 0 ? 100.0 * error / distance : 0.0; }
 
+namespace fs = std::filesystem;
+
+constexpr const char* kStagingPrefix = ".plumb-staging-";
+
+bool starts_with(const std::string& s, const std::string& prefix) { return s.compare(0, prefix.size(), prefix) == 0; }
+
+/// frames/ of a dump: NNNNNN.pcd files only.
+bool is_frame_file_name(const std::string& name) {
+  if (name.size() != 10 || name.compare(6, 4, ".pcd") != 0) return false;
+  return std::all_of(name.begin(), name.begin() + 6, [](char c) { return c >= '0' && c <= '9'; });
+}
+
+/// The first entry of `dir` that is not one of `names` (nor the marker nor a staging directory),
+/// or, inside a "frames" entry, the first file that is not a frame; empty when there is none.
+std::string first_foreign_entry(const fs::path& dir, const std::vector<std::string>& names) {
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name == OutputDir::marker_name() || starts_with(name, kStagingPrefix)) continue;
+    if (std::find(names.begin(), names.end(), name) == names.end()) return name;
+    if (name == "frames" && fs::is_directory(it->path())) {
+      for (fs::directory_iterator f(it->path(), ec); !ec && f != end; f.increment(ec)) {
+        const std::string fname = f->path().filename().string();
+        if (!is_frame_file_name(fname)) return "frames/" + fname;
+      }
+    }
+  }
+  PLUMB_CHECK(!ec, dir.string() << ": cannot list the directory: " << ec.message());
+  return {};
+}
+
+std::string marker_command(const fs::path& dir) {
+  std::ifstream in(dir / OutputDir::marker_name());
+  std::string line;
+  if (!in.is_open() || !std::getline(in, line)) return {};
+  return line;
+}
+
+std::string join(const std::vector<std::string>& names) {
+  std::string out;
+  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out;
+}
+
 }  // namespace
+
+const std::vector<std::string>& frame_dump_names() {
+  static const std::vector<std::string> names = {"meta.json", "frames.csv", "frames",  "wheels.csv",
+                                                 "odom.csv",  "imu.csv",    "gt.tum", "gt_dense.tum"};
+  return names;
+}
+
+const std::vector<std::string>& run_output_names() {
+  static const std::vector<std::string> names = {"report.json", "wheel.tum", "lidar.tum", "bim.tum", "trajectory.svg"};
+  return names;
+}
+
+OutputDir::OutputDir(std::string dir, std::string command, std::vector<std::string> names, bool overwrite,
+                     bool replace_own, std::vector<std::string> nested)
+    : dir_(std::move(dir)), command_(std::move(command)), names_(std::move(names)), nested_(std::move(nested)) {
+  PLUMB_CHECK(!dir_.empty(), "the output directory name is empty");
+  const fs::path path(dir_);
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (fs::exists(st)) {
+    PLUMB_CHECK(fs::is_directory(st), dir_ << ": exists and is not a directory");
+    const bool empty = fs::is_empty(path, ec);
+    PLUMB_CHECK(!ec, dir_ << ": cannot list the directory: " << ec.message());
+    if (!empty) {
+      std::vector<std::string> allowed = names_;
+      allowed.insert(allowed.end(), nested_.begin(), nested_.end());
+      const std::string foreign = first_foreign_entry(path, allowed);
+      const bool own = foreign.empty() && marker_command(path) == "plumb " + command_;
+      std::string shown = foreign;
+      if (shown.empty()) {  // plumb's names, but no marker of this command: name the first one
+        for (fs::directory_iterator it(path, ec), end; !ec && it != end; it.increment(ec)) {
+          shown = it->path().filename().string();
+          if (shown != marker_name() && !starts_with(shown, kStagingPrefix)) break;
+        }
+      }
+      if (own) {
+        PLUMB_CHECK(replace_own || overwrite, dir_ << ": already holds the output of an earlier plumb " << command_
+                                                   << "; pass --overwrite to replace it");
+      } else if (!overwrite) {
+        PLUMB_THROW(dir_ << ": not empty and holds files plumb did not write ("
+                         << "'" << shown << "'"
+                         << (foreign.empty() ? std::string(" without a ") + marker_name() + " marker of plumb " + command_
+                                             : std::string())
+                         << "); refusing to write there. Choose an empty or new directory, or pass --overwrite to "
+                            "replace plumb's "
+                         << command_ << " files in it (" << join(names_) << ")");
+      }
+    }
+  } else {
+    fs::create_directories(path, ec);
+    PLUMB_CHECK(!ec, dir_ << ": cannot create the output directory: " << ec.message());
+    created_ = true;
+  }
+  staging_ = (path / (kStagingPrefix + std::to_string(::getpid()))).string();
+  fs::remove_all(staging_, ec);
+  fs::create_directory(staging_, ec);
+  if (ec) {
+    const std::string message = ec.message();
+    if (created_) fs::remove(path, ec);
+    PLUMB_THROW(dir_ << ": cannot write into the output directory: " << message);
+  }
+  // A file in it, too: a directory may accept mkdir but not a file (quota, full disk).
+  const std::string probe = staging_ + "/" + marker_name();
+  {
+    std::ofstream out(probe);
+    out << "plumb " << command_ << '\n';
+    if (!out.good()) {
+      const std::string message = std::strerror(errno);
+      fs::remove_all(staging_, ec);
+      if (created_) fs::remove(path, ec);
+      PLUMB_THROW(dir_ << ": cannot write into the output directory: " << message);
+    }
+  }
+}
+
+OutputDir::~OutputDir() {
+  if (committed_) return;
+  std::error_code ec;
+  fs::remove_all(staging_, ec);
+  if (created_ && fs::is_empty(dir_, ec)) fs::remove(dir_, ec);
+}
+
+void OutputDir::commit() {
+  PLUMB_CHECK(!committed_, dir_ << ": OutputDir::commit twice");
+  const fs::path out(dir_), staged(staging_);
+  std::error_code ec;
+  std::vector<std::string> entries = names_;
+  entries.push_back(marker_name());  // last: the set is plumb's once everything else is in place
+  for (const std::string& name : entries) {
+    const fs::path from = staged / name, to = out / name;
+    const bool have_new = fs::exists(fs::symlink_status(from, ec));
+    const bool have_old = fs::exists(fs::symlink_status(to, ec));
+    if (have_new && !fs::is_directory(from) && !(have_old && fs::is_directory(fs::symlink_status(to)))) {
+      fs::rename(from, to, ec);  // atomic replacement of a file
+      PLUMB_CHECK(!ec, to.string() << ": cannot move the new file into place: " << ec.message());
+      continue;
+    }
+    if (have_old) {
+      // A directory cannot be renamed over a non-empty one: move the old one aside, then delete it.
+      const fs::path old = out / (std::string(kStagingPrefix) + "old-" + std::to_string(::getpid()) + "-" + name);
+      fs::rename(to, old, ec);
+      PLUMB_CHECK(!ec, to.string() << ": cannot replace the earlier output: " << ec.message());
+      if (have_new) {
+        fs::rename(from, to, ec);
+        PLUMB_CHECK(!ec, to.string() << ": cannot move the new output into place: " << ec.message());
+      }
+      fs::remove_all(old, ec);
+      PLUMB_CHECK(!ec, old.string() << ": cannot remove the earlier output: " << ec.message());
+    } else if (have_new) {
+      fs::rename(from, to, ec);
+      PLUMB_CHECK(!ec, to.string() << ": cannot move the new output into place: " << ec.message());
+    }
+  }
+  fs::remove_all(staged, ec);
+  committed_ = true;
+}
 
 nlohmann::json run_report_json(const RunReport& r) {
   nlohmann::json j;
   j["frames"] = r.frames.size();
+  j["frames_requested"] = r.frames_requested;
+  j["partial"] = r.partial;
+  if (r.partial) j["error"] = r.error;
+  j["warnings"] = r.warnings;
+  j["odometry_clamped_frames"] = r.odometry_clamped_frames;
+  j["ground_truth"] = r.has_ground_truth ? "used" : r.ground_truth_note;
   j["localized"] = r.localized;
   j["localization_status"] = to_string(r.localization_status);
   if (r.localized) {
@@ -67,15 +236,7 @@ nlohmann::json run_report_json(const RunReport& r) {
   return j;
 }
 
-void write_run_outputs(const RunReport& r, const nlohmann::json& report, const bim::BimMesh& mesh,
-                       const io::FrameDumpReader& dump, const std::string& out_dir, const std::string& title,
-                       const std::string& model_name) {
-  std::filesystem::create_directories(out_dir);
-  {
-    std::ofstream out(out_dir + "/report.json");
-    out << report.dump(2) << '\n';
-    PLUMB_CHECK(out.good(), out_dir << "/report.json: write error");
-  }
+void check_localized(const RunReport& r, const io::FrameDumpReader& dump, const std::string& model_name) {
   if (r.localization_status != Status::kOk) {
     if (r.localization.ambiguous) {
       PLUMB_THROW(dump.dir() << ": the first frame fits two places of " << model_name << " about as well (score "
@@ -86,6 +247,17 @@ void write_run_outputs(const RunReport& r, const nlohmann::json& report, const b
                            << to_string(r.localization_status) << ", score " << r.localization.score << ", overlap "
                            << r.localization.fine.overlap << ", see-through " << r.localization.see_through
                            << "); give --start-hint X Y, --gt-start, or check that the dump was recorded in this building");
+  }
+}
+
+void write_run_outputs(const RunReport& r, const nlohmann::json& report, const bim::BimMesh& mesh,
+                       const io::FrameDumpReader& dump, const std::string& out_dir, const std::string& title,
+                       const std::string& model_name) {
+  check_localized(r, dump, model_name);
+  {
+    std::ofstream out(out_dir + "/report.json");
+    out << report.dump(2) << '\n';
+    PLUMB_CHECK(out.good(), out_dir << "/report.json: write error");
   }
   io::write_tum(r.wheel, out_dir + "/wheel.tum");
   io::write_tum(r.lidar, out_dir + "/lidar.tum");
@@ -103,6 +275,10 @@ void write_run_outputs(const RunReport& r, const nlohmann::json& report, const b
   plot.add_trajectory(r.lidar, "LiDAR (no BIM)", "#ff7f0e");
   plot.add_trajectory(r.bim, "BIM-corrected", "#2ca02c");
   io::write_svg(plot, out_dir + "/trajectory.svg");
+}
+
+void print_warnings(const std::vector<std::string>& warnings) {
+  for (const std::string& w : warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
 }
 
 void print_run_summary(const RunReport& r) {

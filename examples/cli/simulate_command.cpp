@@ -2,11 +2,14 @@
 // `plumb simulate MODEL -o DIR [--scenario indoor|site] [--lidar NAME|FILE.json] [--seed S] [--loops N]
 // [--length M] [--clutter F] [--as-built-sigma M] [--as-built-deg D] [--imu mems|2deg_h] [--threads N] [--json]`:
 // a robot drives through (or around) an IFC building; LiDAR frames, wheel encoders, wheel odometry,
-// IMU and ground truth are written as a frame dump directory.
+// IMU and ground truth are written as a frame dump directory. DIR is checked before any work and the
+// dump is staged inside it, then moved into place as a whole (OutputDir, run_output.hpp): a
+// non-empty DIR is refused unless --overwrite, which replaces every dump file (no stale frame is left).
 
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -17,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "registry.hpp"
+#include "run_output.hpp"
 #include "plumb/bim/ifc.hpp"
 #include "plumb/bim/mesh.hpp"
 #include "plumb/core/error.hpp"
@@ -68,7 +72,16 @@ sim::LidarModel lidar_from_json(const std::string& path) {
     } else if (j.contains("elevations_rad")) {
       m.elevations_rad = j.at("elevations_rad").get<std::vector<double>>();
     }
-    m.columns = j.value("columns", m.columns);
+    if (j.contains("columns")) {
+      // Read as an integer in range before converting: a fractional, boolean or huge value would be
+      // truncated, wrapped or (1e10 -> int) undefined.
+      const nlohmann::json& c = j.at("columns");
+      PLUMB_CHECK(c.is_number_integer() && c.get<std::int64_t>() >= 1 &&
+                      c.get<std::int64_t>() <= sim::LidarModel::kMaxColumns,
+                  path << ": \"columns\" must be a whole number in [1, " << sim::LidarModel::kMaxColumns << "], got "
+                       << c.dump());
+      m.columns = static_cast<int>(c.get<std::int64_t>());
+    }
     m.rate_hz = j.value("rate_hz", m.rate_hz);
     m.min_range = j.value("min_range", m.min_range);
     m.max_range = j.value("max_range", m.max_range);
@@ -106,7 +119,7 @@ void run_simulate(const SimulateOptions& o) {
   s.world.as_built_sigma_m = o.as_built_sigma;
   s.world.as_built_sigma_rad = o.as_built_deg * M_PI / 180.0;
   s.num_threads = o.threads;
-  s.dump.overwrite = o.overwrite;
+  s.dump.overwrite = false;  // the staging directory is new
   if (o.compressed) s.dump.encoding = io::PcdEncoding::kBinaryCompressed;
   s.model_name = o.model_path.substr(o.model_path.find_last_of('/') + 1);
   const bool progress_bar = isatty(fileno(stderr)) != 0;
@@ -120,8 +133,11 @@ void run_simulate(const SimulateOptions& o) {
       std::fflush(stderr);
     };
   }
+  // Before the work: an unwritable or foreign output directory is found now.
+  OutputDir out(o.output_dir, "simulate", frame_dump_names(), o.overwrite, false);
   const bim::BimMesh mesh = bim::build_mesh(bim::read_ifc(o.model_path));
-  const sim::ScenarioResult r = sim::simulate_scenario(mesh, o.output_dir, s);
+  const sim::ScenarioResult r = sim::simulate_scenario(mesh, out.staging(), s);
+  out.commit();
   if (o.json) {
     nlohmann::json j = {{"scenario", o.scenario},
                         {"lidar", s.lidar.name},
@@ -158,20 +174,25 @@ void register_simulate_command(CLI::App& app) {
       ->check(CLI::IsMember({"mems", "2deg_h", "ideal"}));
   cmd->add_option("--seed", opts->seed, "Seed of everything random (default 1)");
   cmd->add_option("--loops", opts->loops, "Times the route is driven (default 2)")->check(CLI::Range(1, 1000));
-  cmd->add_option("--length", opts->length, "Stop after this many metres along the route (default: all loops)")
-      ->check(CLI::NonNegativeNumber);
+  // Limits keep every run bounded: the robot gives up after 2 h of driving anyway (RobotSettings).
+  cmd->add_option("--length", opts->length,
+                  "Stop after this many metres along the route, at most 10000 (default: all loops)")
+      ->check(CLI::Range(0.0, 10000.0));
   cmd->add_option("--storey", opts->storey, "Indoor storey index (default: largest free floor area)");
-  cmd->add_option("--clutter", opts->clutter, "Furniture density factor, 0 = none (default 1)")
-      ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--as-built-sigma", opts->as_built_sigma, "As-built element shift, std dev [m] (default 0.01)")
-      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--clutter", opts->clutter,
+                  "Furniture density factor, 0 = none, at most 10 (1: about one piece per 10 m^2; default 1)")
+      ->check(CLI::Range(0.0, sim::WorldSettings::kMaxClutter));
+  cmd->add_option("--as-built-sigma", opts->as_built_sigma, "As-built element shift, std dev [m], at most 1 (default 0.01)")
+      ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--as-built-deg", opts->as_built_deg,
-                  "As-built element rotation about each axis, std dev [deg] (default 0.2; 0 and --as-built-sigma 0 = the exact model)")
-      ->check(CLI::NonNegativeNumber);
+                  "As-built element rotation about each axis, std dev [deg], at most 10 (default 0.2; 0 and "
+                  "--as-built-sigma 0 = the exact model)")
+      ->check(CLI::Range(0.0, 10.0));
   cmd->add_option("--threads", opts->threads, "Frames simulated in parallel (default 1; same output for any)")
       ->check(CLI::Range(1, 256));
   cmd->add_flag("--compressed", opts->compressed, "Write PCD frames binary_compressed (LZF) instead of binary");
-  cmd->add_flag("--overwrite", opts->overwrite, "Write into a directory that already holds a dump");
+  cmd->add_flag("--overwrite", opts->overwrite,
+                "Write into a non-empty directory: every frame dump file in it is replaced (other files are kept)");
   cmd->add_flag("--json", opts->json, "Print a JSON summary");
   cmd->callback([opts] { run_simulate(*opts); });
 }

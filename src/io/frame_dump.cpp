@@ -3,6 +3,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -10,6 +11,7 @@
 #include <sstream>
 #include <string_view>
 #include <system_error>
+#include <unordered_set>
 #include <utility>
 
 #include "plumb/core/error.hpp"
@@ -110,13 +112,14 @@ class JsonParser {
         advance();
         return v;
       }
+      // A set, not a scan of the keys so far: that scan made an object of n keys cost n^2 / 2
+      // string comparisons (minutes for a 1 MB file of short keys).
+      std::unordered_set<std::string> keys;
       for (;;) {
         skip_space();
         if (peek() != '"') fail("expected a string key");
         std::string key = parse_string();
-        for (const auto& kv : v.object) {
-          if (kv.first == key) fail("duplicate key \"" + key + "\"");
-        }
+        if (!keys.insert(key).second) fail("duplicate key \"" + key + "\"");
         skip_space();
         expect(':');
         skip_space();
@@ -245,7 +248,13 @@ class JsonParser {
     }
     double value = 0.0;
     const auto result = std::from_chars(text_.data() + begin, text_.data() + pos_, value);
-    if (result.ec != std::errc() || !std::isfinite(value)) fail("number out of range");
+    if (result.ec == std::errc::result_out_of_range) {
+      // Beyond a double (1e999) or below its smallest (1e-999): kept as strtod rounds it (inf or
+      // 0), so that get_number() can refuse an infinity naming the key it belongs to.
+      value = std::strtod(std::string(text_, begin, pos_ - begin).c_str(), nullptr);
+    } else if (result.ec != std::errc()) {
+      fail("bad number");
+    }
     return value;
   }
 
@@ -261,6 +270,7 @@ class JsonParser {
 
 double get_number(const std::string& name, const JsonValue& v, const char* key) {
   if (v.kind != JsonValue::Kind::kNumber) fail_at(name, v, std::string("\"") + key + "\" must be a number");
+  if (!std::isfinite(v.number)) fail_at(name, v, std::string("\"") + key + "\" must be a finite number");
   return v.number;
 }
 
@@ -355,18 +365,27 @@ std::vector<std::string_view> split_commas(std::string_view line) {
   return fields;
 }
 
-/// Reads a CSV file with a fixed header; calls `row(fields, line_number)` for every data row.
-template <class Row>
-void read_csv(const std::string& path, const char* header, Row&& row) {
+std::string read_text(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   PLUMB_CHECK(in.is_open(), path << ": cannot open file");
-  std::string buffer;
-  int line_number = 0;
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  PLUMB_CHECK(!in.bad(), path << ": read error");
+  return text;
+}
+
+/// Reads CSV text with a fixed header; calls `row(fields, line_number)` for every data row.
+template <class Row>
+void read_csv(const std::string& text, const std::string& path, const char* header, Row&& row) {
+  std::size_t line_number = 0;
   bool have_header = false;
   const std::vector<std::string_view> expected = split_commas(header);
-  while (std::getline(in, buffer)) {
+  std::size_t pos = 0;
+  while (pos < text.size()) {
+    std::size_t end = text.find('\n', pos);
+    if (end == std::string::npos) end = text.size();
+    const std::string_view line = trim(std::string_view(text).substr(pos, end - pos));
+    pos = end + 1;
     ++line_number;
-    const std::string_view line = trim(buffer);
     if (line.empty() || line.front() == '#') continue;
     std::vector<std::string_view> fields = split_commas(line);
     if (!have_header) {
@@ -379,11 +398,10 @@ void read_csv(const std::string& path, const char* header, Row&& row) {
                                                        << " comma-separated fields, got " << fields.size());
     row(fields, line_number);
   }
-  PLUMB_CHECK(!in.bad(), path << ": read error after line " << line_number);
   PLUMB_CHECK(have_header, path << ": empty file (expected the header line '" << header << "')");
 }
 
-double parse_double(std::string_view field, const std::string& path, int line_number, const char* what) {
+double parse_double(std::string_view field, const std::string& path, std::size_t line_number, const char* what) {
   double value = 0.0;
   const char* first = field.data();
   const char* last = field.data() + field.size();
@@ -395,7 +413,7 @@ double parse_double(std::string_view field, const std::string& path, int line_nu
 }
 
 /// Parses every field as a double into `out` and checks the stamp (field 0) increases strictly.
-void parse_row(const std::vector<std::string_view>& fields, const std::string& path, int line_number,
+void parse_row(const std::vector<std::string_view>& fields, const std::string& path, std::size_t line_number,
                const char* const* names, double* out, double& last_stamp, bool first) {
   for (std::size_t k = 0; k < fields.size(); ++k) out[k] = parse_double(fields[k], path, line_number, names[k]);
   PLUMB_CHECK(first || out[0] > last_stamp, path << ':' << line_number << ": stamp " << out[0]
@@ -438,6 +456,7 @@ void append_values(std::string& out, std::initializer_list<double> values) {
 }
 
 constexpr const char* kFramesHeader = "index,stamp,file";
+constexpr double kMinLidarRateHz = 0.1, kMaxLidarRateHz = 1000.0;  // meta.json lidar.rate_hz, when not 0
 constexpr const char* kOdomHeader = "stamp,x,y,theta";
 constexpr const char* kImuHeader = "stamp,wx,wy,wz,ax,ay,az";
 
@@ -526,7 +545,14 @@ FrameDumpMeta parse_frame_dump_meta(const std::string& text, const std::string& 
   if (const JsonValue* l = root.find("lidar")) {
     if (l->kind != JsonValue::Kind::kObject) fail_at(name, *l, "\"lidar\" must be an object");
     if (const JsonValue* v = l->find("name")) meta.lidar.name = get_string(name, *v, "name");
-    if (const JsonValue* v = l->find("rate_hz")) meta.lidar.rate_hz = get_number(name, *v, "rate_hz");
+    if (const JsonValue* v = l->find("rate_hz")) {
+      // 0 = unknown; otherwise a spinning LiDAR's rate. It sets the tolerances of `plumb run` / `lio`
+      // (one LiDAR period), which a rate like 1e-9 Hz would make meaningless.
+      meta.lidar.rate_hz = get_number(name, *v, "rate_hz");
+      if (meta.lidar.rate_hz != 0.0 && !(meta.lidar.rate_hz >= kMinLidarRateHz && meta.lidar.rate_hz <= kMaxLidarRateHz)) {
+        fail_at(name, *v, "\"rate_hz\" must be 0 (unknown) or in [0.1, 1000] Hz");
+      }
+    }
     if (const JsonValue* v = l->find("columns")) {
       const double c = get_number(name, *v, "columns");
       if (c < 0 || c != std::floor(c) || c > 1e7) fail_at(name, *v, "\"columns\" must be a non-negative integer");
@@ -539,6 +565,50 @@ FrameDumpMeta parse_frame_dump_meta(const std::string& text, const std::string& 
   return meta;
 }
 
+// ---- CSV files -----------------------------------------------------------------------------------
+
+FrameDumpIndex parse_frame_dump_frames(const std::string& text, const std::string& name) {
+  static const char* const kNames[] = {"index", "stamp"};
+  FrameDumpIndex out;
+  read_csv(text, name, kFramesHeader, [&](const std::vector<std::string_view>& f, std::size_t line) {
+    const double index = parse_double(f[0], name, line, kNames[0]);
+    PLUMB_CHECK(index == static_cast<double>(out.stamps.size()),
+                name << ':' << line << ": index " << f[0] << ", expected " << out.stamps.size());
+    const double stamp = parse_double(f[1], name, line, kNames[1]);
+    PLUMB_CHECK(out.stamps.empty() || stamp > out.stamps.back(),
+                name << ':' << line << ": stamp " << stamp << " does not increase (previous " << out.stamps.back()
+                     << ")");
+    PLUMB_CHECK(!f[2].empty(), name << ':' << line << ": empty file name");
+    out.stamps.push_back(stamp);
+    out.files.emplace_back(f[2]);
+  });
+  return out;
+}
+
+std::vector<OdomSample> parse_frame_dump_odometry(const std::string& text, const std::string& name) {
+  static const char* const kNames[] = {"stamp", "x", "y", "theta"};
+  std::vector<OdomSample> out;
+  double last = 0.0;
+  read_csv(text, name, kOdomHeader, [&](const std::vector<std::string_view>& f, std::size_t line) {
+    double v[4];
+    parse_row(f, name, line, kNames, v, last, out.empty());
+    out.push_back({v[0], Pose2{v[1], v[2], v[3]}});
+  });
+  return out;
+}
+
+std::vector<ImuSample> parse_frame_dump_imu(const std::string& text, const std::string& name) {
+  static const char* const kNames[] = {"stamp", "wx", "wy", "wz", "ax", "ay", "az"};
+  std::vector<ImuSample> out;
+  double last = 0.0;
+  read_csv(text, name, kImuHeader, [&](const std::vector<std::string_view>& f, std::size_t line) {
+    double v[7];
+    parse_row(f, name, line, kNames, v, last, out.empty());
+    out.push_back({v[0], Vector3d(v[1], v[2], v[3]), Vector3d(v[4], v[5], v[6])});
+  });
+  return out;
+}
+
 // ---- writer --------------------------------------------------------------------------------------
 
 FrameDumpWriter::FrameDumpWriter(const std::string& dir, const FrameDumpMeta& meta,
@@ -549,8 +619,28 @@ FrameDumpWriter::FrameDumpWriter(const std::string& dir, const FrameDumpMeta& me
   fs::create_directories(fs::path(dir) / "frames", ec);
   PLUMB_CHECK(!ec, dir << ": cannot create the frame dump directory: " << ec.message());
   const std::string meta_path = join_path(dir, "meta.json");
-  PLUMB_CHECK(settings.overwrite || !fs::exists(meta_path),
-              dir << ": already holds a frame dump (meta.json); refusing to overwrite");
+  // The whole set of a dump's files: without overwrite any of them refuses the directory; with
+  // it they are all removed first, so that a shorter dump leaves no stale frame or file behind.
+  static const char* const kDumpFiles[] = {"meta.json", "frames.csv", "wheels.csv", "odom.csv",
+                                           "imu.csv",   "gt.tum",     "gt_dense.tum"};
+  for (const char* f : kDumpFiles) {
+    const fs::path p = fs::path(dir) / f;
+    if (!fs::exists(p)) continue;
+    PLUMB_CHECK(settings.overwrite, dir << ": already holds a frame dump (" << f << "); refusing to overwrite");
+    fs::remove(p, ec);
+    PLUMB_CHECK(!ec, p.string() << ": cannot remove the earlier file: " << ec.message());
+  }
+  for (fs::directory_iterator it(fs::path(dir) / "frames", ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string f = it->path().filename().string();
+    const bool frame_file = f.size() == 10 && f.compare(6, 4, ".pcd") == 0 &&
+                            f.find_first_not_of("0123456789") == 6;
+    if (!frame_file) continue;  // not the writer's: left alone
+    PLUMB_CHECK(settings.overwrite, dir << ": already holds frames (frames/" << f << "); refusing to overwrite");
+    std::error_code rm;
+    fs::remove(it->path(), rm);
+    PLUMB_CHECK(!rm, it->path().string() << ": cannot remove the earlier frame: " << rm.message());
+  }
+  PLUMB_CHECK(!ec, dir << "/frames: cannot list the directory: " << ec.message());
   write_text_file(meta_path, frame_dump_meta_json(meta));
   const std::string frames_path = join_path(dir, "frames.csv");
   frames_csv_ = std::fopen(frames_path.c_str(), "wb");
@@ -627,20 +717,9 @@ FrameDumpReader::FrameDumpReader(const std::string& dir) : dir_(dir) {
   meta_ = parse_frame_dump_meta(text, meta_path);
 
   const std::string frames_path = join_path(dir, "frames.csv");
-  static const char* const kNames[] = {"index", "stamp"};
-  double last = 0.0;
-  read_csv(frames_path, kFramesHeader, [&](const std::vector<std::string_view>& f, int line) {
-    const double index = parse_double(f[0], frames_path, line, kNames[0]);
-    PLUMB_CHECK(index == static_cast<double>(stamps_.size()),
-                frames_path << ':' << line << ": index " << f[0] << ", expected " << stamps_.size());
-    const double stamp = parse_double(f[1], frames_path, line, kNames[1]);
-    PLUMB_CHECK(stamps_.empty() || stamp > last,
-                frames_path << ':' << line << ": stamp " << stamp << " does not increase (previous " << last << ")");
-    PLUMB_CHECK(!f[2].empty(), frames_path << ':' << line << ": empty file name");
-    last = stamp;
-    stamps_.push_back(stamp);
-    files_.emplace_back(f[2]);
-  });
+  FrameDumpIndex index = parse_frame_dump_frames(read_text(frames_path), frames_path);
+  stamps_ = std::move(index.stamps);
+  files_ = std::move(index.files);
 }
 
 double FrameDumpReader::stamp(std::size_t i) const {
@@ -668,28 +747,12 @@ std::vector<WheelEncoderReading> FrameDumpReader::wheels() const {
 
 std::vector<OdomSample> FrameDumpReader::odometry() const {
   const std::string path = join_path(dir_, "odom.csv");
-  static const char* const kNames[] = {"stamp", "x", "y", "theta"};
-  std::vector<OdomSample> out;
-  double last = 0.0;
-  read_csv(path, kOdomHeader, [&](const std::vector<std::string_view>& f, int line) {
-    double v[4];
-    parse_row(f, path, line, kNames, v, last, out.empty());
-    out.push_back({v[0], Pose2{v[1], v[2], v[3]}});
-  });
-  return out;
+  return parse_frame_dump_odometry(read_text(path), path);
 }
 
 std::vector<ImuSample> FrameDumpReader::imu() const {
   const std::string path = join_path(dir_, "imu.csv");
-  static const char* const kNames[] = {"stamp", "wx", "wy", "wz", "ax", "ay", "az"};
-  std::vector<ImuSample> out;
-  double last = 0.0;
-  read_csv(path, kImuHeader, [&](const std::vector<std::string_view>& f, int line) {
-    double v[7];
-    parse_row(f, path, line, kNames, v, last, out.empty());
-    out.push_back({v[0], Vector3d(v[1], v[2], v[3]), Vector3d(v[4], v[5], v[6])});
-  });
-  return out;
+  return parse_frame_dump_imu(read_text(path), path);
 }
 
 Trajectory FrameDumpReader::ground_truth() const { return read_tum(join_path(dir_, "gt.tum")); }

@@ -476,6 +476,11 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
     feats.plane_pool = feats.planes;
   }
 
+  if (!initialized_ && cloud.size() < set.min_init_points) {
+    res.mode = LioFrameMode::kSkipped;
+    res.status = Status::kInsufficientData;
+    return finish(res);
+  }
   if (!initialized_) {
     initialized_ = true;
     last_stamp_ = stamp;

@@ -94,6 +94,32 @@ RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& 
   report.bim_points = bim_cloud->size();
 
   const std::size_t n = settings.max_frames > 0 ? std::min(settings.max_frames, dump.num_frames()) : dump.num_frames();
+  report.frames_requested = n;
+  // The wheel odometry is the prior of every frame: a frame beyond its ends by more than one LiDAR
+  // period (a sample lost at the end of a recording is normal, a missing stretch is not) would be
+  // tracked with a frozen prior, so it is refused before any work.
+  {
+    const double rate = dump.meta().lidar.rate_hz;
+    const double tolerance = rate > 0.0 ? 1.0 / rate : 0.1;
+    const std::string odom_path = dump.dir() + "/odom.csv";
+    for (std::size_t i = 0; i < n; ++i) {
+      const double t = dump.stamp(i);
+      PLUMB_CHECK(t >= odom.first_stamp() - tolerance,
+                  odom_path << ": the wheel odometry starts at " << odom.first_stamp() << " s, after frame " << i
+                            << " (stamp " << t << " s; up to one LiDAR period, " << tolerance
+                            << " s, is tolerated)");
+      PLUMB_CHECK(t <= odom.last_stamp() + tolerance,
+                  odom_path << ": the wheel odometry ends at " << odom.last_stamp() << " s, before frame " << i
+                            << " (stamp " << t << " s) and the " << (n - 1 - i)
+                            << " frames after it (up to one LiDAR period, " << tolerance
+                            << " s, is tolerated; --max-frames " << i << " processes the frames it covers)");
+      if (t < odom.first_stamp() || t > odom.last_stamp()) ++report.odometry_clamped_frames;
+    }
+    if (report.odometry_clamped_frames > 0) {
+      report.warnings.push_back(odom_path + ": " + std::to_string(report.odometry_clamped_frames) +
+                                " frame(s) lie just outside the wheel odometry's span; their prior is the nearest sample");
+    }
+  }
   auto frame_at = [&](std::size_t i) {
     PointCloud f = dump.frame(i);
     if (settings.deskew) {
@@ -126,6 +152,11 @@ RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& 
   if (dump.has_ground_truth()) {
     gt = dump.ground_truth();
     report.has_ground_truth = gt.size() >= n;
+    report.ground_truth_note = report.has_ground_truth ? "used" : "too_short";
+    if (!report.has_ground_truth) {
+      report.warnings.push_back(dump.dir() + "/gt.tum: " + std::to_string(gt.size()) + " poses for " +
+                                std::to_string(n) + " frames; no accuracy report (Table 2, APE) for this run");
+    }
     for (std::size_t i = 0; report.has_ground_truth && i < n; ++i) {
       PLUMB_CHECK(!gt.has_stamps() || std::abs(gt.stamps[i] - dump.stamp(i)) < 1e-6,
                   dump.dir() << "/gt.tum: pose " << i << " has stamp " << gt.stamps[i] << ", frame " << i
@@ -146,8 +177,17 @@ RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& 
   for (std::size_t i = 0; i < n; ++i) {
     const double stamp = dump.stamp(i);
     const Pose2 o = odom.at(stamp);
-    PointCloud frame = (i == 0 && first_frame) ? std::move(*first_frame) : frame_at(i);
-    BimFrameResult r = odometry.process(frame, stamp, o);
+    BimFrameResult r;
+    try {
+      PointCloud frame = (i == 0 && first_frame) ? std::move(*first_frame) : frame_at(i);
+      r = odometry.process(frame, stamp, o);
+    } catch (const std::exception& e) {
+      // What was computed so far is kept: the caller writes it marked partial.
+      if (report.frames.empty()) throw;
+      report.partial = true;
+      report.error = std::string("frame ") + std::to_string(i) + ": " + e.what();
+      break;
+    }
     report.wheel.push_back(stamp, report.T_bim_base0 * odom0.ominus().oplus(o).to_isometry());
     report.lidar.push_back(stamp, r.T_bim_base_uncorrected);
     report.bim.push_back(stamp, r.T_bim_base);
@@ -159,18 +199,19 @@ RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& 
     if (settings.progress) settings.progress(i + 1, n);
   }
   report.seconds_frames = seconds_since(t_frames);
-  report.frames_per_second = report.seconds_frames > 0 ? static_cast<double>(n) / report.seconds_frames : 0.0;
+  const std::size_t m = report.frames.size();  // n, or fewer when the run stopped early
+  report.frames_per_second = report.seconds_frames > 0 ? static_cast<double>(m) / report.seconds_frames : 0.0;
   for (const BimFrameResult& f : report.frames) {
-    report.mean_seconds_front_end += f.seconds_front_end / static_cast<double>(n);
-    report.mean_seconds_segment += f.seconds_segment / static_cast<double>(n);
-    report.mean_seconds_icp += f.seconds_icp / static_cast<double>(n);
-    report.mean_seconds_process += f.seconds_total / static_cast<double>(n);
+    report.mean_seconds_front_end += f.seconds_front_end / static_cast<double>(m);
+    report.mean_seconds_segment += f.seconds_segment / static_cast<double>(m);
+    report.mean_seconds_icp += f.seconds_icp / static_cast<double>(m);
+    report.mean_seconds_process += f.seconds_total / static_cast<double>(m);
   }
 
   if (report.has_ground_truth) {
-    std::vector<double> dist(n, 0.0);
-    for (std::size_t i = 1; i < n; ++i) dist[i] = dist[i - 1] + horizontal_error(gt.poses[i], gt.poses[i - 1]);
-    report.path_length = dist[n - 1];
+    std::vector<double> dist(m, 0.0);
+    for (std::size_t i = 1; i < m; ++i) dist[i] = dist[i - 1] + horizontal_error(gt.poses[i], gt.poses[i - 1]);
+    report.path_length = dist[m - 1];
     auto row = [&](const std::string& name, std::size_t i) {
       ObservationRow r;
       r.name = name;
@@ -184,27 +225,27 @@ RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& 
     for (int k = 1; k <= 2; ++k) {
       const double target = report.path_length * k / 3.0;
       const std::size_t i = static_cast<std::size_t>(std::lower_bound(dist.begin(), dist.end(), target) - dist.begin());
-      report.table.push_back(row("P" + std::to_string(k), std::min(i, n - 1)));
+      report.table.push_back(row("P" + std::to_string(k), std::min(i, m - 1)));
     }
-    report.table.push_back(row("end", n - 1));
+    report.table.push_back(row("end", m - 1));
     auto rmse = [&](const Trajectory& t) {
       double s = 0.0;
-      for (std::size_t i = 0; i < n; ++i) s += std::pow(horizontal_error(t.poses[i], gt.poses[i]), 2);
-      return std::sqrt(s / static_cast<double>(n));
+      for (std::size_t i = 0; i < m; ++i) s += std::pow(horizontal_error(t.poses[i], gt.poses[i]), 2);
+      return std::sqrt(s / static_cast<double>(m));
     };
     report.ape_rmse_wheel = rmse(report.wheel);
     report.ape_rmse_lidar = rmse(report.lidar);
     report.ape_rmse_bim = rmse(report.bim);
     auto max_error = [&](const Trajectory& t) {
-      double m = 0.0;
-      for (std::size_t i = 0; i < n; ++i) m = std::max(m, horizontal_error(t.poses[i], gt.poses[i]));
-      return m;
+      double worst = 0.0;
+      for (std::size_t i = 0; i < m; ++i) worst = std::max(worst, horizontal_error(t.poses[i], gt.poses[i]));
+      return worst;
     };
     report.max_error_wheel = max_error(report.wheel);
     report.max_error_lidar = max_error(report.lidar);
     report.max_error_bim = max_error(report.bim);
     double sum_sq = 0.0;
-    for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t i = 0; i < m; ++i) {
       if (!report.frames[i].registered) continue;
       const double e = horizontal_error(report.frames[i].T_bim_base_registered, gt.poses[i]);
       sum_sq += e * e;

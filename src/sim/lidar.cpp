@@ -42,8 +42,14 @@ void LidarModel::validate() const {
                 "LidarModel '" << name << "': elevations_rad[" << r << "] = " << elevations_rad[r]
                                << " is not in [-pi/2, pi/2]");
   }
-  PLUMB_CHECK(columns >= 1, "LidarModel '" << name << "': columns " << columns << " must be >= 1");
-  PLUMB_CHECK(std::isfinite(rate_hz) && rate_hz > 0.0, "LidarModel '" << name << "': rate_hz " << rate_hz << " must be > 0");
+  PLUMB_CHECK(columns >= 1 && columns <= kMaxColumns,
+              "LidarModel '" << name << "': columns " << columns << " must be in [1, " << kMaxColumns << "]");
+  PLUMB_CHECK(num_rays() <= kMaxRaysPerSweep, "LidarModel '" << name << "': " << num_rays()
+                                                             << " rays per sweep (rows x columns) exceed "
+                                                             << kMaxRaysPerSweep);
+  PLUMB_CHECK(std::isfinite(rate_hz) && rate_hz >= kMinRateHz && rate_hz <= kMaxRateHz,
+              "LidarModel '" << name << "': rate_hz " << rate_hz << " must be in [" << kMinRateHz << ", "
+                             << kMaxRateHz << "] Hz");
   PLUMB_CHECK(std::isfinite(min_range) && min_range >= 0.0,
               "LidarModel '" << name << "': min_range " << min_range << " must be >= 0");
   PLUMB_CHECK(max_range > min_range && !std::isnan(max_range),

@@ -198,6 +198,9 @@ ScenarioPlan plan_scenario(const bim::BimMesh& mesh, const ScenarioSettings& s) 
     if (t + sweep > plan.trajectory.end_time() + 1e-9) break;
     plan.frame_stamps.push_back(t);
   }
+  PLUMB_CHECK(!plan.frame_stamps.empty(), "scenario: the drive (" << plan.trajectory.end_time() - plan.trajectory.start_time()
+                                                                  << " s) is shorter than one LiDAR sweep (" << sweep
+                                                                  << " s): no frame to simulate");
   return plan;
 }
 

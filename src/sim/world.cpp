@@ -99,8 +99,8 @@ World::World(const bim::BimMesh& mesh, const WorldSettings& settings)
               "World: settings.as_built_sigma_m " << s.as_built_sigma_m << " must be finite and >= 0");
   PLUMB_CHECK(std::isfinite(s.as_built_sigma_rad) && s.as_built_sigma_rad >= 0.0,
               "World: settings.as_built_sigma_rad " << s.as_built_sigma_rad << " must be finite and >= 0");
-  PLUMB_CHECK(std::isfinite(s.clutter) && s.clutter >= 0.0,
-              "World: settings.clutter " << s.clutter << " must be finite and >= 0");
+  PLUMB_CHECK(std::isfinite(s.clutter) && s.clutter >= 0.0 && s.clutter <= WorldSettings::kMaxClutter,
+              "World: settings.clutter " << s.clutter << " must be in [0, " << WorldSettings::kMaxClutter << "]");
   PLUMB_CHECK(s.num_people >= 0, "World: settings.num_people " << s.num_people << " must be >= 0");
   PLUMB_CHECK(s.person_speed > 0.0 && s.person_radius > 0.0 && s.person_height > 0.0 &&
                   std::isfinite(s.person_speed + s.person_radius + s.person_height),

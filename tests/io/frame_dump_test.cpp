@@ -210,6 +210,13 @@ TEST(FrameDumpTest, MalformedMetaNamesFileLineAndColumn) {
       {"[1, 2]", "must be a JSON object"},
       {"{\"T_base_lidar\": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1], \"T_base_lidar\": 1}", "duplicate key"},
       {"", "unexpected end"},
+      // Not finite: the message names the key (a number beyond a double is not a parse error).
+      {"{\"T_base_lidar\": [1,0,0,1e999, 0,1,0,0, 0,0,1,0, 0,0,0,1]}", "\"T_base_lidar\" must be a finite number"},
+      {"{\"T_base_lidar\": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1], \"T_base_imu\": [-1e999,0,0,0, 0,1,0,0, 0,0,1,0, "
+       "0,0,0,1]}",
+       "\"T_base_imu\" must be a finite number"},
+      {"{\"T_base_lidar\": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1], \"lidar\": {\"rate_hz\": 1e-9}}", "rate_hz"},
+      {"{\"T_base_lidar\": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1], \"lidar\": {\"rate_hz\": -10}}", "rate_hz"},
   };
   for (const Case& c : cases) {
     write_text(dir + "/meta.json", c.json);
@@ -276,6 +283,29 @@ TEST(FrameDumpTest, MissingDirectoryAndOverwriteAreErrors) {
   FrameDumpWriteSettings overwrite;
   overwrite.overwrite = true;
   EXPECT_NO_THROW(FrameDumpWriter(dir, some_meta(), overwrite));
+}
+
+TEST(FrameDumpTest, OverwriteReplacesTheWholeDump) {
+  const std::string dir = fresh_dir("overwrite_whole");
+  PointCloud c;
+  c.points.emplace_back(1.0f, 2.0f, 3.0f);
+  {
+    FrameDumpWriter w(dir, some_meta());
+    for (int i = 0; i < 3; ++i) w.add_frame(1.0 + i, c);
+    w.write_odometry({{1.0, Pose2{}}});
+  }
+  write_text(dir + "/frames/notes.txt", "a user's file");
+  FrameDumpWriteSettings overwrite;
+  overwrite.overwrite = true;
+  {
+    FrameDumpWriter w(dir, some_meta(), overwrite);
+    w.add_frame(5.0, c);
+  }
+  // One frame, no stale frame file nor odom.csv of the earlier dump; files not the writer's are kept.
+  EXPECT_EQ(FrameDumpReader(dir).num_frames(), 1u);
+  EXPECT_FALSE(fs::exists(dir + "/frames/000001.pcd"));
+  EXPECT_FALSE(fs::exists(dir + "/odom.csv"));
+  EXPECT_TRUE(fs::exists(dir + "/frames/notes.txt"));
 }
 
 TEST(FrameDumpTest, MetaJsonIsValidJsonWithTheDocumentedKeys) {

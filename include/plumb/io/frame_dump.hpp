@@ -77,7 +77,9 @@ struct FrameDumpMeta {
 /// @brief Settings of FrameDumpWriter.
 struct FrameDumpWriteSettings {
   PcdEncoding encoding = PcdEncoding::kBinary;  ///< PCD DATA kind of the frames
-  bool overwrite = false;  ///< allow writing into a directory that already holds meta.json
+  /// Allow writing into a directory that already holds a dump file (meta.json, frames.csv, ...,
+  /// frames/NNNNNN.pcd): all of them are removed first (other files are left). False: refused.
+  bool overwrite = false;
 };
 
 /// @brief Writes a frame dump directory incrementally (frames are streamed, not held in memory).
@@ -152,11 +154,31 @@ class FrameDumpReader {
   std::vector<std::string> files_;
 };
 
+/// @brief The rows of frames.csv.
+struct FrameDumpIndex {
+  std::vector<double> stamps;      ///< [s], strictly increasing
+  std::vector<std::string> files;  ///< as written: relative to DIR or absolute
+};
+
+/// @brief Parse frames.csv text (`index,stamp,file`; indices 0, 1, 2, ...); `name` is used in messages.
+/// @throws plumb::Error `name:LINE: message` on a missing header, a wrong field count, a field that
+///         is not a finite number, an index out of sequence, a stamp that does not increase or an
+///         empty file name.
+FrameDumpIndex parse_frame_dump_frames(const std::string& text, const std::string& name = "frames.csv");
+/// @brief Parse odom.csv text (`stamp,x,y,theta`); `name` is used in messages.
+/// @throws plumb::Error `name:LINE: message` as parse_frame_dump_frames().
+std::vector<OdomSample> parse_frame_dump_odometry(const std::string& text, const std::string& name = "odom.csv");
+/// @brief Parse imu.csv text (`stamp,wx,wy,wz,ax,ay,az`); `name` is used in messages.
+/// @throws plumb::Error `name:LINE: message` as parse_frame_dump_frames().
+std::vector<ImuSample> parse_frame_dump_imu(const std::string& text, const std::string& name = "imu.csv");
+
 /// @brief meta.json text for `meta` (what FrameDumpWriter writes).
 std::string frame_dump_meta_json(const FrameDumpMeta& meta);
 /// @brief Parse meta.json text; `name` is used in messages.
 /// @throws plumb::Error `name:LINE:COL: message` on malformed JSON, a missing required key
-///         (T_base_lidar) or a value of the wrong kind.
+///         (T_base_lidar), a value of the wrong kind, a number that is not finite (e.g. 1e999; the
+///         message names the key), a transform that is not rigid, or a lidar rate_hz that is neither
+///         0 (unknown) nor in [0.1, 1000] Hz.
 FrameDumpMeta parse_frame_dump_meta(const std::string& text, const std::string& name = "meta.json");
 
 }  // namespace plumb::io

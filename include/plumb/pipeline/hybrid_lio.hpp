@@ -59,7 +59,7 @@ enum class LioFrameMode {
   kLoam,        ///< LOAM edge / plane residuals against the feature map
   kIcp,         ///< ICP residuals (see IcpMetric) against the point map
   kPrediction,  ///< no usable LiDAR residuals: IMU (or constant-velocity) prediction only
-  kSkipped,     ///< frame rejected (stamp not after the previous frame's); the state is unchanged
+  kSkipped,     ///< frame rejected (stamp not after the previous frame's, or too few points to start the map); the state is unchanged
 };
 
 /// @brief "init", "loam", "icp", "prediction", "skipped".
@@ -94,6 +94,10 @@ struct HybridLioSettings {
   /// LOAM residuals, fewer use ICP (Zhou et al. 2021, sec. 3.2: 48). Ground points (the road) constrain only
   /// height, roll and pitch, so they do not count as structure.
   std::size_t min_plane_points = 48;
+  /// The map starts at the first frame with at least this many points; an emptier frame before it
+  /// (a sensor still starting up) is skipped, else every later frame would match an empty map.
+  /// 1: only an empty frame is skipped (`plumb lio` asks for 100).
+  std::size_t min_init_points = 1;
   /// True: the switch counts the frame's plane residuals against the map whose plane is not flat
   /// (LioFrameResult::num_structure_matches: what LOAM would really use off the ground); false: it
   /// counts the selected plane features off the ground (num_structure_planes, at most
@@ -239,6 +243,7 @@ class HybridLio {
   const ImuState& state() const { return state_; }
   const HybridLioSettings& settings() const { return settings_; }
   std::size_t num_frames() const { return num_frames_; }          ///< frames processed (not skipped)
+  bool initialized() const { return initialized_; }               ///< a frame has started the map
   std::size_t num_imu_dropped() const { return num_imu_dropped_; }  ///< samples add_imu() rejected
   const VoxelHashMap& edge_map() const { return edge_map_; }      ///< @brief Local LOAM edge map.
   const VoxelHashMap& plane_map() const { return plane_map_; }    ///< @brief Local LOAM plane map.

@@ -55,6 +55,18 @@ struct RunReport {
   Trajectory lidar;  ///< front end without BIM corrections
   Trajectory bim;    ///< corrected
   std::vector<BimFrameResult> frames;
+  std::size_t frames_requested = 0;     ///< frames the run was to process (max_frames or the whole dump)
+  /// A frame failed (e.g. an unreadable frame file) after others were processed: the report covers
+  /// frames [0, frames.size()) and `error` says what stopped the run. A failure before any frame
+  /// result is thrown instead.
+  bool partial = false;
+  std::string error;
+  /// Data problems that did not stop the run (odometry clamped at its ends, gt.tum too short), for
+  /// the caller to show.
+  std::vector<std::string> warnings;
+  /// Frames whose stamp lies outside odom.csv's span by less than one LiDAR period (the wheel pose
+  /// is held at the nearest sample); farther outside is an error.
+  std::size_t odometry_clamped_frames = 0;
   bool localized = false;               ///< the initial pose came from BimLocalizer
   Status localization_status = Status::kOk;
   BimLocalization localization;         ///< when localized
@@ -68,6 +80,7 @@ struct RunReport {
   double mean_seconds_front_end = 0.0, mean_seconds_segment = 0.0, mean_seconds_icp = 0.0, mean_seconds_process = 0.0;
   // With ground truth (gt.tum):
   bool has_ground_truth = false;
+  std::string ground_truth_note = "absent";  ///< "used", "absent" (no gt.tum) or "too_short" (fewer poses than frames)
   double initial_error_xy = 0.0, initial_error_yaw_deg = 0.0;
   std::vector<ObservationRow> table;    ///< observation points at 1/3, 2/3 of the path and the end
   double path_length = 0.0;             ///< [m]
@@ -87,6 +100,8 @@ class OdometryInterpolator {
   /// @throws plumb::Error when there is no sample or the stamps do not increase
   explicit OdometryInterpolator(std::vector<io::OdomSample> samples);
   Pose2 at(double t) const;
+  double first_stamp() const { return s_.front().stamp; }
+  double last_stamp() const { return s_.back().stamp; }
 
  private:
   std::vector<io::OdomSample> s_;
@@ -101,7 +116,10 @@ PointCloud sample_bim_cloud(const bim::BimMesh& mesh, double spacing);
 
 /// @brief Run the BIM-corrected odometry over a frame dump (see the file comment).
 /// @return the report; the localization failing gives localization_status != kOk and no trajectory
-/// @throws plumb::Error for a dump without odom.csv, or a model without geometry
+/// @throws plumb::Error for a dump without odom.csv, odom.csv not covering a frame to be processed
+///         (beyond one LiDAR period, 1 / meta rate_hz, 0.1 s when unknown; the message names odom.csv
+///         and the first frame stamp it misses), a model without geometry, or a failure before any
+///         frame result (a later failure gives a partial report, see RunReport::partial)
 RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& mesh, const RunSettings& settings = {});
 
 /// @brief Undo the motion distortion of a frame: each point, measured at stamp + time_i in the LiDAR

@@ -26,7 +26,7 @@ struct LidarModel {
   std::string name;                   ///< preset name or user's label
   std::vector<double> elevations_rad; ///< elevation of each row (ring) [rad]; ring index = row
   int columns = 1800;                 ///< firings per revolution
-  double rate_hz = 10.0;              ///< revolutions per second [Hz]
+  double rate_hz = 10.0;              ///< revolutions per second [Hz], in [kMinRateHz, kMaxRateHz]
   double min_range = 0.3;             ///< returns closer than this are dropped [m]
   double max_range = 100.0;           ///< no return beyond this [m]
   double range_sigma = 0.01;          ///< range noise, standard deviation [m]
@@ -36,7 +36,12 @@ struct LidarModel {
   std::size_t num_rays() const { return elevations_rad.size() * static_cast<std::size_t>(columns); }
   /// @brief Duration of one revolution [s].
   double sweep_duration() const { return 1.0 / rate_hz; }
-  /// @brief Throw plumb::Error naming the field when a value is out of range.
+  /// Limits validate() enforces: every sweep and every simulation stays bounded (real spinning
+  /// LiDARs turn at 5-20 Hz and fire at most a few hundred thousand rays per sweep).
+  static constexpr double kMinRateHz = 1.0, kMaxRateHz = 100.0;
+  static constexpr int kMaxColumns = 100000;
+  static constexpr std::size_t kMaxRaysPerSweep = std::size_t{1} << 22;
+  /// @brief Throw plumb::Error naming the field when a value is out of range (see the limits above).
   void validate() const;
 };
 

@@ -27,9 +27,12 @@ enum SimLabel : std::int32_t {
 
 /// @brief Settings of World.
 struct WorldSettings {
+  /// Largest `clutter`: one piece per m^2 is more than a floor holds, and placing costs
+  /// attempts in proportion to the target count (World throws above it).
+  static constexpr double kMaxClutter = 10.0;
   double as_built_sigma_m = 0.01;  ///< per-element random shift, each axis [m]
   double as_built_sigma_rad = 0.2 * 3.14159265358979323846 / 180.0;  ///< per-element rotation, each axis [rad]
-  double clutter = 1.0;      ///< furniture density factor: about one box per 10 m^2 of floor; 0 = none
+  double clutter = 1.0;      ///< furniture density factor: about one box per 10 m^2 of floor; 0 = none; <= kMaxClutter
   int num_people = 2;        ///< people walking back and forth (0 = none)
   std::uint64_t seed = 1;    ///< deviations, clutter and people depend on this only
   int storey = -1;           ///< storey whose floors get clutter and people; -1 = all storeys
