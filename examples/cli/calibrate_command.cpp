@@ -195,7 +195,7 @@ void register_calibrate_command(CLI::App& app) {
                   "Wheel columns are encoder ticks, this many per wheel revolution")
       ->check(positive_number(1e9));
   cmd->add_option("--spacing", options->spacing, "With --log: match scan k against scan k + spacing")
-      ->check(CLI::Range(1, 1000))
+      ->check(finite_number(1, 1000))
       ->capture_default_str();
   cmd->add_option("--nominal", options->nominal,
                   "With --log: nominal r_L r_R axle [m] l_x l_y [m] l_theta [rad], only to seed the scan matcher")

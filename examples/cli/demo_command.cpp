@@ -1,12 +1,12 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// `plumb demo [-o DIR] [--length M] [--seed S] [--threads N] [--surveyed-start] [--json]`: the whole
-// product on the built-in sample. Writes the procedural demo office (IFC4), simulates a robot driving
+// `plumb demo [-o DIR] [--length M] [--loops N] [--seed S] [--threads N] [--surveyed-start] [--overwrite]
+// [--json]`: the whole product on the built-in sample. Writes the procedural demo office (IFC4), simulates a robot driving
 // two loops through it (rfans32 LiDAR, wheel encoders, IMU, as-built deviations, furniture, people),
 // localizes the first frame in the model (BimLocalizer, no hint; --surveyed-start starts at the
 // true pose instead), runs the BIM-corrected odometry and prints the error table of Liu et al. 2022,
 // Table 2 (wheel odometry, LiDAR without BIM, BIM-corrected) against the exact ground truth.
 // DIR receives demo_office.ifc, dump/ (the frame dump) and run/ (what `plumb run` writes). A DIR that
-// an earlier `plumb demo` filled is replaced; one holding anything else is refused (OutputDir).
+// an earlier `plumb demo` filled is replaced; one holding anything else is refused unless --overwrite (OutputDir).
 
 #include <chrono>
 #include <algorithm>
@@ -19,6 +19,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "cli_support.hpp"
 #include "registry.hpp"
 #include "run_output.hpp"
 #include "plumb/bim/demo_building.hpp"
@@ -37,6 +38,7 @@ struct DemoCommandOptions {
   int threads = 0;
   bool surveyed_start = false;
   bool json = false;
+  bool overwrite = false;
 };
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -47,10 +49,10 @@ void run_demo(const DemoCommandOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
   // Checked before any work; each part is staged and moved into place when it is complete. The
   // dump and run directories follow the same rule inside DIR (their own files only).
-  OutputDir top(o.out_dir, "demo", {"demo_office.ifc"}, false, true, {"dump", "run"});
+  OutputDir top(o.out_dir, "demo", {"demo_office.ifc"}, o.overwrite, true, {"dump", "run"});
   const std::string model_path = top.staging() + "/demo_office.ifc";
-  OutputDir dump_out(o.out_dir + "/dump", "simulate", frame_dump_names(), false, true);
-  OutputDir run_out(o.out_dir + "/run", "run", run_output_names(), false, true);
+  OutputDir dump_out(o.out_dir + "/dump", "simulate", frame_dump_names(), o.overwrite, true);
+  OutputDir run_out(o.out_dir + "/run", "run", run_output_names(), o.overwrite, true);
   const std::string dump_dir = dump_out.staging();
   const std::string run_dir = o.out_dir + "/run";
   const int threads = o.threads > 0 ? o.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -116,15 +118,17 @@ void register_demo_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "demo", "The whole job on the built-in sample: demo office -> simulated robot -> BIM-corrected odometry -> Table 2");
   cmd->add_option("-o,--output", o->out_dir, "Output directory")->capture_default_str();
-  cmd->add_option("--length", o->length, "Metres driven")->check(CLI::Range(1.0, 10000.0))->capture_default_str();
+  cmd->add_option("--length", o->length, "Metres driven")->check(finite_number(1.0, 10000.0))->capture_default_str();
   cmd->add_option("--loops", o->loops, "Times the route is driven (the length stops it earlier)")
-      ->check(CLI::Range(1, 100))
+      ->check(finite_number(1, 100))
       ->capture_default_str();
-  cmd->add_option("--seed", o->seed, "Seed of the simulation")->capture_default_str();
-  cmd->add_option("--threads", o->threads, "Threads of the simulator (0 = all cores)")->check(CLI::Range(0, 256));
+  cmd->add_option("--seed", o->seed, "Seed of the simulation")->check(non_negative_number())->capture_default_str();
+  cmd->add_option("--threads", o->threads, "Threads of the simulator (0 = all cores)")->check(finite_number(0, 256));
   cmd->add_flag("--surveyed-start", o->surveyed_start,
                 "Start at the true (surveyed) pose instead of localizing the first frame in the model");
   cmd->add_flag("--json", o->json, "Print the report as JSON");
+  cmd->add_flag("--overwrite", o->overwrite,
+                "Write into a directory that holds other files too (plumb's demo files in it are replaced)");
   cmd->callback([o]() { run_demo(*o); });
 }
 

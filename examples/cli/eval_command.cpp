@@ -243,7 +243,8 @@ void register_eval_command(CLI::App& app) {
   cmd->add_flag("--json", options->json, "Print exactly one JSON object instead of the table");
   cmd->add_option("--est-times", options->estimate_times, "KITTI times file of the estimate");
   cmd->add_option("--ref-times", options->reference_times, "KITTI times file of the reference");
-  cmd->add_option("--drift-at", options->drift_at, "Also report drift % at these pose indices (after association)");
+  cmd->add_option("--drift-at", options->drift_at, "Also report drift % at these pose indices (after association)")
+      ->check(non_negative_number());
   cmd->add_option("--drift-at-time", options->drift_at_time, "Also report drift % at the poses nearest these stamps [s]")
       ->check(finite_number());
   cmd->add_option("--max-time-diff", options->max_time_difference, "Largest stamp difference to associate [s]")

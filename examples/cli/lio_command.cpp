@@ -21,6 +21,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "cli_support.hpp"
 #include "registry.hpp"
 #include "run_output.hpp"
 #include "plumb/core/error.hpp"
@@ -255,15 +256,15 @@ void register_lio_command(CLI::App& app) {
   cmd->add_flag("--overwrite", o->overwrite,
                 "Write into a directory holding files plumb did not write (plumb's lio files in it are replaced)");
   // Unsigned options would take "-3" as a huge count: the checks reject negative input.
-  cmd->add_option("--max-frames", o->max_frames, "Process only the first N frames")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--max-frames", o->max_frames, "Process only the first N frames")->check(non_negative_number());
   cmd->add_option("--min-plane-points", o->min_plane_points, "Hybrid switch: fewer plane points off the ground -> ICP")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative_number());
   cmd->add_flag("--no-deskew", o->no_deskew, "Do not undo the motion distortion of the frames");
   cmd->add_option("--map-window", o->map_window,
                   "Local maps keep only what the last N frames filled (no implicit loop closure when the "
                   "route comes back; 0: everything within 60 m)")
-      ->check(CLI::Range(0, 1000000000));
+      ->check(finite_number(0, 1000000000));
   cmd->add_option("--icp-metric", o->icp_metric,
                   "Hybrid ICP frames: point-to-point (Zhou et al. 2021, eq. 20) or point-to-distribution "
                   "(each pair weighted by the covariance of its map neighbours)")

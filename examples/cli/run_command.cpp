@@ -13,6 +13,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "cli_support.hpp"
 #include "registry.hpp"
 #include "run_output.hpp"
 #include "plumb/bim/ifc.hpp"
@@ -84,15 +85,15 @@ void register_run_command(CLI::App& app) {
   cmd->add_option("--start-hint", o->start_hint, "Rough start position X Y in the BIM frame (e.g. the room's centre)")
       ->expected(2);
   cmd->add_option("--start-hint-radius", o->start_hint_radius, "How far from --start-hint the robot may be [m]")
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->capture_default_str();
   // Unsigned: the check rejects "-3", which would otherwise wrap to a huge count.
   cmd->add_option("--max-frames", o->max_frames, "Process only the first N frames (0 = all)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative_number());
   cmd->add_flag("--overwrite", o->overwrite,
                 "Write into a directory holding files plumb did not write (plumb's run files in it are replaced)");
   cmd->add_option("--correct-every", o->correct_every, "BIM correction every k-th frame")
-      ->check(CLI::Range(1, 1000))
+      ->check(finite_number(1, 1000))
       ->capture_default_str();
   cmd->callback([o]() { run(*o); });
 }

@@ -107,7 +107,7 @@ void register_scan2d_command(CLI::App& app) {
       ->required();
   cmd->add_flag("--json", opts->json, "Print a JSON summary");
   cmd->add_option("--local-map", opts->local_map_size, "Keyframes in the local map (default 1)")
-      ->check(CLI::Range(1, 100));
+      ->check(finite_number(1, 100));
   cmd->add_option("--laser-pose", opts->laser_pose,
                   "Laser mounting pose on the robot: x y [m] (within 100 m) theta [rad] (within 2 pi)")
       ->expected(3)

@@ -19,6 +19,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "cli_support.hpp"
 #include "registry.hpp"
 #include "run_output.hpp"
 #include "plumb/bim/ifc.hpp"
@@ -172,24 +173,24 @@ void register_simulate_command(CLI::App& app) {
                   "LiDAR preset (rfans32, vlp16, os1-64) or a JSON model file (default: rfans32 indoor, vlp16 site)");
   cmd->add_option("--imu", opts->imu, "IMU noise preset: mems (default), 2deg_h, ideal")
       ->check(CLI::IsMember({"mems", "2deg_h", "ideal"}));
-  cmd->add_option("--seed", opts->seed, "Seed of everything random (default 1)");
-  cmd->add_option("--loops", opts->loops, "Times the route is driven (default 2)")->check(CLI::Range(1, 1000));
+  cmd->add_option("--seed", opts->seed, "Seed of everything random (default 1)")->check(non_negative_number());
+  cmd->add_option("--loops", opts->loops, "Times the route is driven (default 2)")->check(finite_number(1, 1000));
   // Limits keep every run bounded: the robot gives up after 2 h of driving anyway (RobotSettings).
   cmd->add_option("--length", opts->length,
                   "Stop after this many metres along the route, at most 10000 (default: all loops)")
-      ->check(CLI::Range(0.0, 10000.0));
+      ->check(finite_number(0.0, 10000.0));
   cmd->add_option("--storey", opts->storey, "Indoor storey index (default: largest free floor area)");
   cmd->add_option("--clutter", opts->clutter,
                   "Furniture density factor, 0 = none, at most 10 (1: about one piece per 10 m^2; default 1)")
-      ->check(CLI::Range(0.0, sim::WorldSettings::kMaxClutter));
+      ->check(finite_number(0.0, sim::WorldSettings::kMaxClutter));
   cmd->add_option("--as-built-sigma", opts->as_built_sigma, "As-built element shift, std dev [m], at most 1 (default 0.01)")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(finite_number(0.0, 1.0));
   cmd->add_option("--as-built-deg", opts->as_built_deg,
                   "As-built element rotation about each axis, std dev [deg], at most 10 (default 0.2; 0 and "
                   "--as-built-sigma 0 = the exact model)")
-      ->check(CLI::Range(0.0, 10.0));
+      ->check(finite_number(0.0, 10.0));
   cmd->add_option("--threads", opts->threads, "Frames simulated in parallel (default 1; same output for any)")
-      ->check(CLI::Range(1, 256));
+      ->check(finite_number(1, 256));
   cmd->add_flag("--compressed", opts->compressed, "Write PCD frames binary_compressed (LZF) instead of binary");
   cmd->add_flag("--overwrite", opts->overwrite,
                 "Write into a non-empty directory: every frame dump file in it is replaced (other files are kept)");

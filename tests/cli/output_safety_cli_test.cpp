@@ -187,6 +187,16 @@ TEST_F(CliTest, ForeignFilesAreRefusedWithoutOverwriteAndLeftUntouched) {
   EXPECT_EQ(Json::parse(test::read_text(out + "/report.json")).at("frames"), 3);
   EXPECT_EQ(test::read_text(out + "/notes.txt"), "field notes\n");
   EXPECT_FALSE(has_staging_leftover(out));
+  // demo takes --overwrite too: its model, dump and run appear beside the user's file.
+  const std::string demo_out = unique("foreign_demo");
+  fs::remove_all(demo_out);
+  fs::create_directories(demo_out);
+  std::ofstream(demo_out + "/notes.txt") << "field notes\n";
+  r = run_cli("demo -o " + q(demo_out) + " --length 2 --surveyed-start --overwrite");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::is_regular_file(demo_out + "/run/report.json"));
+  EXPECT_EQ(test::read_text(demo_out + "/notes.txt"), "field notes\n");
+  fs::remove_all(demo_out);
   // Its own output is plumb's: `run` replaces it without --overwrite.
   r = run_cli(run_args(dump, out + "_own", "--max-frames 2"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
