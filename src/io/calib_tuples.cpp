@@ -11,6 +11,7 @@
 #include <string_view>
 #include <system_error>
 
+#include "plumb/io/input_file.hpp"
 #include "plumb/core/error.hpp"
 
 namespace plumb::io {
@@ -214,8 +215,7 @@ std::vector<CalibrationTuple> parse_calib_tuples(const std::string& text, const 
 }
 
 std::vector<CalibrationTuple> read_calib_tuples(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  PLUMB_CHECK(in.is_open(), path << ": cannot open file");
+  std::ifstream in = open_input_file(path);
   std::ostringstream buffer;
   buffer << in.rdbuf();
   PLUMB_CHECK(!in.bad(), path << ": read error");

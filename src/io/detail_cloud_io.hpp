@@ -18,6 +18,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "plumb/io/input_file.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/core/point_cloud.hpp"
 
@@ -25,6 +26,7 @@ namespace plumb::io::cloud_detail {
 
 /// Read a whole file into memory with one read. Throws plumb::Error naming the path.
 inline std::vector<char> slurp_file(const std::string& path) {
+  check_input_file(path);  // a directory opens with fopen on Linux and reads as an error or nothing
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (f == nullptr) PLUMB_THROW(path << ": cannot open for reading: " << std::strerror(errno));
   std::vector<char> data;

@@ -14,6 +14,7 @@
 #include <unordered_set>
 #include <utility>
 
+#include "plumb/io/input_file.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/io/trajectory.hpp"
 #include "plumb/io/wheel_encoders.hpp"
@@ -366,8 +367,7 @@ std::vector<std::string_view> split_commas(std::string_view line) {
 }
 
 std::string read_text(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  PLUMB_CHECK(in.is_open(), path << ": cannot open file");
+  std::ifstream in = open_input_file(path);  // names a missing file or a directory as such
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   PLUMB_CHECK(!in.bad(), path << ": read error");
   return text;
@@ -711,10 +711,8 @@ void FrameDumpWriter::close() {
 
 FrameDumpReader::FrameDumpReader(const std::string& dir) : dir_(dir) {
   const std::string meta_path = join_path(dir, "meta.json");
-  std::ifstream in(meta_path, std::ios::binary);
-  PLUMB_CHECK(in.is_open(), meta_path << ": cannot open file (not a frame dump directory?)");
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  meta_ = parse_frame_dump_meta(text, meta_path);
+  PLUMB_CHECK(std::filesystem::exists(meta_path), meta_path << ": no such file (not a frame dump directory?)");
+  meta_ = parse_frame_dump_meta(read_text(meta_path), meta_path);
 
   const std::string frames_path = join_path(dir, "frames.csv");
   FrameDumpIndex index = parse_frame_dump_frames(read_text(frames_path), frames_path);

@@ -10,6 +10,7 @@
 #include <string_view>
 #include <system_error>
 
+#include "plumb/io/input_file.hpp"
 #include "plumb/core/error.hpp"
 
 namespace plumb::io {
@@ -99,8 +100,7 @@ std::vector<WheelEncoderReading> parse_wheel_encoders(const std::string& text, c
 
 std::vector<WheelEncoderReading> read_wheel_encoders(const std::string& path,
                                                      const WheelEncoderReadSettings& settings) {
-  std::ifstream in(path, std::ios::binary);
-  PLUMB_CHECK(in.is_open(), path << ": cannot open file");
+  std::ifstream in = open_input_file(path);
   std::ostringstream buffer;
   buffer << in.rdbuf();
   PLUMB_CHECK(!in.bad(), path << ": read error");

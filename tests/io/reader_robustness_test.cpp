@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <filesystem>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -12,9 +13,15 @@
 #include <gtest/gtest.h>
 
 #include "io_test_util.hpp"
+#include "test_data.hpp"
 #include "plumb/core/error.hpp"
+#include "plumb/io/calib_tuples.hpp"
 #include "plumb/io/carmen.hpp"
+#include "plumb/io/cloud_io.hpp"
 #include "plumb/io/frame_dump.hpp"
+#include "plumb/io/kitti_bin.hpp"
+#include "plumb/io/pcd.hpp"
+#include "plumb/io/ply.hpp"
 #include "plumb/io/trajectory.hpp"
 #include "plumb/io/wheel_encoders.hpp"
 
@@ -165,6 +172,24 @@ TEST(ReaderRobustnessTest, TrajectoryTextNamesFileAndLine) {
   expect_error([] { parse_tum("1 0 0 0 0 0 0 1\n2 0 0 0 0 0 0\n", "a.tum"); }, {"a.tum:2", "expected 8 fields"});
   expect_error([] { parse_kitti("1 0 0 0 0 1 0 0 0 0 2 0\n", "poses.txt"); }, {"poses.txt:1", "not a rotation"});
   expect_error([] { parse_times("0.0\n0.1\nx\n", "times.txt"); }, {"times.txt:3", "not a finite number"});
+}
+
+// A directory where a file is expected is named as such by every path reader, instead of an
+// allocation failure, a stream error naming nothing, or "no tuples" / an empty cloud.
+TEST(ReaderRobustnessTest, ADirectoryGivenAsAFileIsNamedAsSuch) {
+  const std::string dir = plumb::test::temp_path("reader_robustness_dir");
+  std::filesystem::create_directories(dir + "/meta.json");
+  std::filesystem::create_directories(dir + "/frame.pcd");
+  expect_error([&] { read_cloud(dir + "/frame.pcd"); }, {dir + "/frame.pcd", "is a directory"});
+  expect_error([&] { read_pcd(dir); }, {dir, "is a directory"});
+  expect_error([&] { read_ply(dir); }, {dir, "is a directory"});
+  expect_error([&] { read_kitti_bin(dir); }, {dir, "is a directory"});
+  expect_error([&] { read_carmen(dir); }, {dir, "is a directory"});
+  expect_error([&] { read_calib_tuples(dir); }, {dir, "is a directory"});
+  expect_error([&] { read_wheel_encoders(dir); }, {dir, "is a directory"});
+  // A dump whose meta.json is a directory.
+  expect_error([&] { FrameDumpReader{dir}; }, {dir + "/meta.json", "is a directory"});
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -68,7 +68,7 @@ TEST(WheelEncodersTest, MalformedInputNamesFileAndLine) {
   plumb::io::WheelEncoderReadSettings s;
   s.ticks_per_revolution = -1;
   expect_error([&] { parse_wheel_encoders("0,1,2\n", "w.csv", s); }, {"w.csv", "ticks_per_revolution"});
-  expect_error([] { plumb::io::read_wheel_encoders("/nonexistent/w.csv"); }, {"/nonexistent/w.csv", "cannot open"});
+  expect_error([] { plumb::io::read_wheel_encoders("/nonexistent/w.csv"); }, {"/nonexistent/w.csv", "no such file"});
 }
 
 }  // namespace
