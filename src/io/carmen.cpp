@@ -226,8 +226,8 @@ bool is_gzip(const char* data, std::size_t size) {
   return size >= 2 && static_cast<unsigned char>(data[0]) == 0x1f && static_cast<unsigned char>(data[1]) == 0x8b;
 }
 
-/// Inflate every gzip member of `data` in turn, as gzread() does.
-std::string gunzip(const char* data, std::size_t size, const std::string& name) {
+/// Inflate every gzip member of `data` in turn, as gzread() does; at most `max_bytes` of text.
+std::string gunzip(const char* data, std::size_t size, const std::string& name, std::size_t max_bytes) {
   z_stream z{};
   PLUMB_CHECK(inflateInit2(&z, 16 + MAX_WBITS) == Z_OK, name << ": cannot initialise zlib");
   std::string text;
@@ -246,6 +246,11 @@ std::string gunzip(const char* data, std::size_t size, const std::string& name) 
     z.avail_out = static_cast<uInt>(out.size());
     const int ret = inflate(&z, Z_NO_FLUSH);
     text.append(out.data(), out.size() - z.avail_out);
+    if (text.size() > max_bytes) {
+      error = "inflates to more than " + std::to_string(max_bytes) +
+              " bytes of text (CarmenReadSettings::max_inflated_bytes)";
+      break;
+    }
     if (ret == Z_STREAM_END) {
       const std::size_t rest = z.avail_in + (size - consumed);
       const std::size_t at = size - rest;
@@ -272,7 +277,9 @@ std::string gunzip(const char* data, std::size_t size, const std::string& name) 
 
 CarmenLog read_carmen_buffer(const char* data, std::size_t size, const std::string& name,
                              const CarmenReadSettings& settings) {
-  if (is_gzip(data, size)) return parse_carmen(gunzip(data, size, name), name, settings);
+  if (is_gzip(data, size)) {
+    return parse_carmen(gunzip(data, size, name, settings.max_inflated_bytes), name, settings);
+  }
   return parse_carmen(std::string(data, size), name, settings);
 }
 

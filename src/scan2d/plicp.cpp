@@ -17,19 +17,31 @@ namespace {
 /// Unit normals of an ordered point chain: the chord between the nearest chain points at least
 /// `baseline` away on either side (walking while consecutive points are closer than max_gap), so
 /// that range noise on densely sampled scans does not randomise them; zero where none exists.
+/// The walk steps one point at a time for 16 points, then by 1/16 of the way walked: on scans of
+/// very many beams (a CARMEN log may carry 10^6) the cost per point stays logarithmic in the
+/// number of points within the baseline instead of linear, and the chord at most ~6 % longer.
 std::vector<Vector2d> chain_normals(const std::vector<Vector2d>& pts, double max_gap, double baseline) {
   const std::size_t n = pts.size();
   std::vector<Vector2d> normals(n, Vector2d::Zero());
   const double max_sq = max_gap * max_gap, base_sq = baseline * baseline;
+  // first[i] / last[i]: the ends of the run of points linked by gaps below max_gap around i.
+  std::vector<std::size_t> first(n), last(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    first[i] = i > 0 && (pts[i - 1] - pts[i]).squaredNorm() < max_sq ? first[i - 1] : i;
+  }
+  for (std::size_t i = n; i-- > 0;) {
+    last[i] = i + 1 < n && (pts[i + 1] - pts[i]).squaredNorm() < max_sq ? last[i + 1] : i;
+  }
+  constexpr std::size_t kUnitSteps = 16;
   for (std::size_t i = 0; i < n; ++i) {
     std::size_t lo = i, hi = i;
-    while (lo > 0 && (pts[lo - 1] - pts[lo]).squaredNorm() < max_sq &&
-           (pts[lo] - pts[i]).squaredNorm() < base_sq) {
-      --lo;
+    for (std::size_t off = 0; lo > first[i] && (pts[lo] - pts[i]).squaredNorm() < base_sq;) {
+      off += off < kUnitSteps ? 1 : off / kUnitSteps;
+      lo = off >= i - first[i] ? first[i] : i - off;
     }
-    while (hi + 1 < n && (pts[hi + 1] - pts[hi]).squaredNorm() < max_sq &&
-           (pts[hi] - pts[i]).squaredNorm() < base_sq) {
-      ++hi;
+    for (std::size_t off = 0; hi < last[i] && (pts[hi] - pts[i]).squaredNorm() < base_sq;) {
+      off += off < kUnitSteps ? 1 : off / kUnitSteps;
+      hi = off >= last[i] - i ? last[i] : i + off;
     }
     const Vector2d d = pts[hi] - pts[lo];
     const double len = d.norm();

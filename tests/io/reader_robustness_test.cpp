@@ -85,6 +85,38 @@ TEST(ReaderRobustnessTest, CarmenLineWithMoreFieldsThanAnyMessageIsAnError) {
   expect_error([&] { read_carmen_bytes(gzip_stored(text), "big.log.gz"); }, {"big.log.gz:2", "more than"});
 }
 
+// The largest legal message: a FLASER of 1,000,000 beams (the most read_carmen accepts) is read.
+TEST(ReaderRobustnessTest, CarmenLargestLegalScanIsRead) {
+  std::string text = "ODOM 0 0 0 0 0 0 1 h 1\nFLASER 1000000";
+  for (std::size_t i = 0; i < 1000000; ++i) text += i % 2 == 0 ? " 1.5" : " 2.25";
+  text += " 0 0 0 0 0 0 1.05 h 1.05\n";
+  const CarmenLog log = parse_carmen(text, "dense.log");
+  ASSERT_EQ(log.lasers.size(), 1u);
+  ASSERT_EQ(log.lasers[0].scan.ranges.size(), 1000000u);
+  EXPECT_EQ(log.lasers[0].scan.ranges[999999], 2.25);
+  std::string over = "FLASER 1000001";
+  expect_error([&] { parse_carmen(over + " 0 0 0 0 0 0 1 h 1\n", "over.log"); }, {"over.log:1"});
+}
+
+// A gzip log is inflated before it is parsed; past max_inflated_bytes of text the reader stops
+// and names the input, so a small hostile file (deflate reaches ~1000:1) cannot take gigabytes.
+TEST(ReaderRobustnessTest, CarmenGzipInflatingPastTheCapIsAnError) {
+  std::string text;
+  for (int k = 0; k < 200; ++k) text += kSmallLog;
+  const std::string gz = gzip_stored(text);
+  CarmenReadSettings settings;
+  settings.max_inflated_bytes = text.size();
+  EXPECT_EQ(read_carmen_buffer(gz.data(), gz.size(), "fits.log.gz", settings).lasers.size(), 200u);
+  settings.max_inflated_bytes = text.size() - 1;
+  expect_error([&] { read_carmen_buffer(gz.data(), gz.size(), "bomb.log.gz", settings); },
+               {"bomb.log.gz", "max_inflated_bytes"});
+  // Members after the first count towards the same cap.
+  const std::string two = gzip_stored(text) + gzip_stored(text);
+  settings.max_inflated_bytes = 2 * text.size() - 1;
+  expect_error([&] { read_carmen_buffer(two.data(), two.size(), "two.log.gz", settings); },
+               {"two.log.gz", "max_inflated_bytes"});
+}
+
 // Messages the reader skips are not split at all, so their length does not matter.
 TEST(ReaderRobustnessTest, CarmenLongUnknownMessageIsSkipped) {
   std::string text = kSmallLog;

@@ -151,6 +151,22 @@ TEST(PlicpTest, RecoversKnownTransformInRoomFromSeveralStarts) {
   }
 }
 
+// The densest scan a CARMEN log may carry (1,000,000 beams, io::read_carmen's limit) is matched
+// like a sparse one: each normal's chord walks to its baseline in strides that grow with the way
+// walked, so the cost does not grow with the square of the density (seconds, not minutes).
+TEST(PlicpTest, DensestLegalScanIsMatchedAsASparseOne) {
+  const auto world = test::room_world();
+  const Case c{{0.0, 0.0, 0.0}, {0.2, 0.1, 0.05}};
+  const LaserScan ref = test::cast_scan(world, c.T_world_ref, 1000000, kPi);
+  const LaserScan cur = test::cast_scan(world, c.T_world_cur, 1000000, kPi);
+  const Pose2 truth = c.T_world_ref.ominus().oplus(c.T_world_cur);
+  const PlicpResult r = plicp(cur, ref, truth.oplus(Pose2{0.05, -0.05, 0.03}));
+  ASSERT_EQ(r.status, Status::kOk);
+  EXPECT_NEAR(r.T_ref_cur.x, truth.x, 0.005);
+  EXPECT_NEAR(r.T_ref_cur.y, truth.y, 0.005);
+  EXPECT_NEAR(wrap_angle(r.T_ref_cur.theta - truth.theta), 0.0, 0.002);
+}
+
 TEST(PlicpTest, RecoversKnownTransformWithRangeNoise) {
   const auto world = test::room_world();
   for (const Pose2& o : {Pose2{0.1, -0.1, 0.05}, Pose2{-0.1, 0.1, -0.08}}) {

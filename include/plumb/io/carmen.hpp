@@ -81,6 +81,10 @@ struct CarmenReadSettings {
   /// FLASER carries no maximum range; readings >= this are "no return" (the logs write the
   /// sensor's maximum, ~50-82 m, then) [m]. Also caps RAWLASER/ROBOTLASER1's own maximum range.
   double flaser_range_max = 50.0;
+  /// A gzip log is inflated in memory before it is parsed; inflating stops with an error past
+  /// this many bytes of text, so a small corrupt or hostile file cannot take minutes and
+  /// gigabytes (deflate reaches ~1000:1). The default, 4 GiB, is ~40x the largest shared log.
+  std::size_t max_inflated_bytes = std::size_t{4} << 30;
 };
 
 /// @brief Read a CARMEN log, plain text or gzip (detected from the content, not the name).
@@ -92,7 +96,8 @@ CarmenLog read_carmen(const std::string& path, const CarmenReadSettings& setting
 /// @brief read_carmen() on the bytes of a file held in memory, plain text or gzip (one or more
 ///        members, as `cat a.gz b.gz` makes; bytes after the last member that do not start another
 ///        one are ignored, as gzread() does); `name` stands for the path in messages.
-/// @throws plumb::Error as read_carmen(); for corrupt or truncated gzip data, naming `name`.
+/// @throws plumb::Error as read_carmen(); for corrupt or truncated gzip data, or gzip data that
+///         inflates to more than `settings.max_inflated_bytes`, naming `name`.
 CarmenLog read_carmen_buffer(const char* data, std::size_t size, const std::string& name,
                              const CarmenReadSettings& settings = {});
 

@@ -35,7 +35,9 @@ struct PlicpReferenceSettings {
   /// correspondence segment) only when their points are closer than this [m].
   double max_neighbor_distance = 0.5;
   /// A current point's normal is the chord to the nearest neighbours at least this far away on
-  /// each side, which averages out range noise on dense scans [m].
+  /// each side, which averages out range noise on dense scans [m]. Past the 16th neighbour the
+  /// walk to them takes strides of 1/16 of the way walked, so the chord may reach ~6 % beyond
+  /// the baseline and the cost grows with the log, not the number, of beams within it.
   double normal_baseline = 0.05;
 };
 
@@ -98,7 +100,9 @@ struct PlicpSettings {
   /// Current-scan neighbours farther apart than this do not define a normal [m].
   double max_neighbor_distance = 0.5;
   /// A current point's normal is the chord to the nearest neighbours at least this far away on
-  /// each side, which averages out range noise on dense scans [m].
+  /// each side, which averages out range noise on dense scans [m]. Past the 16th neighbour the
+  /// walk to them takes strides of 1/16 of the way walked, so the chord may reach ~6 % beyond
+  /// the baseline and the cost grows with the log, not the number, of beams within it.
   double normal_baseline = 0.05;
   /// Trust region per round: when the exact solution of eq. 17 moves the estimate farther than
   /// this, a proximal term around the estimate is added (and grown) until the step fits [m] ...
