@@ -6,6 +6,8 @@
 // OUT is checked before any work and replaced as a whole (OutputDir, run_output.hpp). Frames too
 // empty to start the map are skipped; the first usable one starts it (at gt.tum's pose of that
 // frame). A frame failing after others were processed still writes the set ("partial": true, exit 1).
+// Exit code 3 (kExitJobFailed) when no frame after the first was registered (LOAM or ICP): the set is
+// written, but the trajectory is the motion prediction alone.
 
 #include <algorithm>
 #include <cmath>
@@ -15,6 +17,7 @@
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -240,6 +243,16 @@ void run(const LioOptions& o) {
   }
   PLUMB_CHECK(!partial, o.dump_dir << ": stopped at " << error << "; wrote the " << done << " of " << n
                                    << " frames processed to " << o.out_dir << " (report.json: \"partial\": true)");
+  const std::size_t registered =
+      count[static_cast<int>(LioFrameMode::kLoam)] + count[static_cast<int>(LioFrameMode::kIcp)];
+  if (done >= 2 && registered == 0) {
+    std::ostringstream os;
+    os << o.dump_dir << ": no frame after the first was registered to the map ("
+       << count[static_cast<int>(LioFrameMode::kPrediction)] << " prediction-only, "
+       << count[static_cast<int>(LioFrameMode::kSkipped)] << " skipped); the trajectory written to " << o.out_dir
+       << " is the motion prediction alone";
+    throw JobFailed(os.str());
+  }
 }
 
 }  // namespace

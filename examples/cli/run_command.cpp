@@ -5,9 +5,12 @@
 // OUT is checked before any work and the set is replaced as a whole (OutputDir, run_output.hpp): a
 // directory with files plumb did not write is refused unless --overwrite. A frame failing after
 // others were processed still writes the set, report.json saying "partial": true, and exits 1.
+// Exit code 3 (kExitJobFailed) when no frame after the first was matched by the front end and no
+// BIM anchor after the first frame was accepted: the set is written, but it holds nothing measured by the LiDAR.
 
 #include <iostream>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -68,6 +71,18 @@ void run(const RunOptions& o) {
   PLUMB_CHECK(!r.partial, o.dump_dir << ": stopped at " << r.error << "; wrote the " << r.frames.size() << " of "
                                      << r.frames_requested << " frames processed to " << o.out_dir
                                      << " (report.json: \"partial\": true)");
+  // Nothing of the LiDAR reached the trajectories: they are the wheel odometry under another name.
+  std::size_t later_anchors = 0;  // the first frame's anchor only confirms the start pose
+  for (std::size_t k = 1; k < r.frames.size(); ++k) {
+    later_anchors += r.frames[k].anchor.decision == AnchorDecision::kAccepted ? 1 : 0;
+  }
+  if (r.frames.size() >= 2 && r.fallbacks + 1 >= r.frames.size() && later_anchors == 0) {
+    std::ostringstream os;
+    os << o.dump_dir << ": no frame after the first was matched by the scan front end (" << r.fallbacks
+       << " fallbacks to the wheel prior) and no BIM anchor after it was accepted; the trajectories written to "
+       << o.out_dir << " are the wheel odometry";
+    throw JobFailed(os.str());
+  }
 }
 
 }  // namespace

@@ -367,6 +367,42 @@ TEST_F(CliTest, LioStartsAtTheFirstUsableFrame) {
   fs::remove_all(out);
 }
 
+// A LiDAR that sees (almost) nothing after the first frame: every later frame falls back to the
+// wheel prior in `run` and to the motion prediction in `lio`. The sets are written, but the job
+// failed: exit 3 with a message saying what the trajectories are. One usable frame more and it
+// is a success again.
+TEST_F(CliTest, AJobWhereTheLidarNeverRegisteredExitsThree) {
+  const std::string dump = copy_dump("blind_dump");
+  PointCloud three;
+  three.points = {Vector3f(1, 0, 0), Vector3f(0, 1, 0), Vector3f(40, 40, 0)};
+  for (std::size_t i = 1; i < 8; ++i) {
+    char name[64];
+    std::snprintf(name, sizeof(name), "/frames/%06zu.pcd", i);
+    io::write_pcd(dump + name, three);
+  }
+  const std::string out = unique("blind_out");
+  fs::remove_all(out);
+  test::RunResult r = run_cli(run_args(dump, out, "--max-frames 8 --json"));
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("plumb: failed: " + dump + ": no frame after the first was matched"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("wheel odometry"), std::string::npos) << r.err;
+  EXPECT_EQ(Json::parse(r.out).at("fallbacks"), 7);
+  EXPECT_EQ(count_data_lines(out + "/bim.tum"), 8u);
+  r = run_cli(run_args(dump, out, "--max-frames 1 --overwrite"));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+
+  r = run_cli("lio " + q(dump) + " --mode loam --max-frames 8 --overwrite -o " + q(out) + " --json");
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("plumb: failed: " + dump + ": no frame after the first was registered"), std::string::npos)
+      << r.err;
+  EXPECT_EQ(Json::parse(r.out).at("frames_per_mode").at("prediction"), 7);
+  EXPECT_EQ(count_data_lines(out + "/trajectory.tum"), 8u);
+  r = run_cli("lio " + q(dump) + " --mode loam --max-frames 9 --overwrite -o " + q(out));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  fs::remove_all(dump);
+  fs::remove_all(out);
+}
+
 TEST_F(CliTest, ANonFiniteExtrinsicOrAbsurdRateInMetaJsonIsNamed) {
   const std::string dump = copy_dump("meta_dump");
   const std::string meta = test::read_text(dump + "/meta.json");
