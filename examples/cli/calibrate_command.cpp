@@ -212,7 +212,9 @@ void register_calibrate_command(CLI::App& app) {
                   "Per round, drop tuples with residuals above this quantile")
       ->check(finite_number(0.5, 1.0))
       ->capture_default_str();
-  cmd->callback([options]() { run_calibrate(*options); });
+  cmd->callback([options]() {
+    naming_inputs({options->tuples_path, options->log_path, options->wheels_path}, [&] { run_calibrate(*options); });
+  });
 }
 
 }  // namespace plumb::cli

@@ -2,14 +2,16 @@
 #pragma once
 
 // Shared pieces of the `plumb` subcommands: numeric option checks that reject NaN and infinity
-// (CLI11's own PositiveNumber / Range let NaN through and print their bounds with 309 digits), and
-// the exit code of a job that ran to the end but failed.
+// (CLI11's own PositiveNumber / Range let NaN through and print their bounds with 309 digits), the
+// exit code of a job that ran to the end but failed, and errors that name the command's inputs.
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdlib>
 #include <iostream>
 #include <limits>
+#include <new>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -30,6 +32,37 @@ class JobFailed : public plumb::Error {
  public:
   explicit JobFailed(const std::string& what) : plumb::Error(what) {}
 };
+
+/// Run a subcommand's work `f` on the files and directories `inputs` (empty names are ignored).
+/// An error from deep inside the library often cannot know which file its data came from (a
+/// voxel grid that would overflow, a cloud without extent, trajectories without a common stamp):
+/// one whose message names none of the inputs is rethrown prefixed with them, "A, B: message", so
+/// every failure names what the user gave. JobFailed keeps its type (and so its exit code).
+template <class F>
+void naming_inputs(const std::vector<std::string>& inputs, F&& f) {
+  auto named = [&inputs](const std::string& what) {
+    std::string prefix;
+    for (std::size_t i = 0; i < inputs.size(); ++i) {
+      const std::string& input = inputs[i];
+      if (input.empty() || std::find(inputs.begin(), inputs.begin() + static_cast<std::ptrdiff_t>(i), input) !=
+                               inputs.begin() + static_cast<std::ptrdiff_t>(i)) {
+        continue;  // unset, or named already
+      }
+      if (what.find(input) != std::string::npos) return what;
+      prefix += (prefix.empty() ? "" : ", ") + input;
+    }
+    return prefix.empty() ? what : prefix + ": " + what;
+  };
+  try {
+    f();
+  } catch (const JobFailed& e) {
+    throw JobFailed(named(e.what()));
+  } catch (const plumb::Error& e) {
+    throw plumb::Error(named(e.what()));
+  } catch (const std::bad_alloc&) {
+    throw plumb::Error(named("out of memory (std::bad_alloc): the input asks for more than this machine has"));
+  }
+}
 
 /// A finite number in [lo, hi] (or (lo, hi] when `lo_open`); either bound may be infinite. CLI11
 /// prefixes the message with the option's name. Integer options can use it too: CLI11 still

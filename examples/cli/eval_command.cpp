@@ -259,7 +259,10 @@ void register_eval_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--orthonormalize", options->orthonormalize,
                 "Project KITTI rotations onto SO(3) (default: keep them as printed, as evo does)");
-  cmd->callback([options]() { run_eval(*options); });
+  cmd->callback([options]() {
+    naming_inputs({options->estimate_path, options->reference_path, options->estimate_times, options->reference_times},
+                  [&] { run_eval(*options); });
+  });
 }
 
 }  // namespace plumb::cli

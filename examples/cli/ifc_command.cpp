@@ -178,7 +178,7 @@ void register_ifc_commands(CLI::App& app) {
   CLI::App* ci = app.add_subcommand("ifcinfo", "Parse and mesh an IFC model; print schema, units, element counts");
   ci->add_option("MODEL", info->model, "IFC file (IFC2X3 / IFC4)")->required();
   ci->add_flag("--json", info->json, "Print one JSON object");
-  ci->callback([info]() { run_ifcinfo(*info); });
+  ci->callback([info]() { naming_inputs({info->model}, [&] { run_ifcinfo(*info); }); });
 
   auto cloud = std::make_shared<IfcOptions>();
   CLI::App* cc = app.add_subcommand("ifc2cloud", "Sample an IFC model's surfaces into a labelled point cloud");
@@ -192,7 +192,7 @@ void register_ifc_commands(CLI::App& app) {
   cc->add_option("--storey", cloud->storey, "Storey name or index to keep");
   cc->add_option("--elements-out", cloud->elements_out, "Write the element table (JSON) here");
   cc->add_flag("--json", cloud->json, "Print one JSON object");
-  cc->callback([cloud]() { run_ifc2cloud(*cloud); });
+  cc->callback([cloud]() { naming_inputs({cloud->model}, [&] { run_ifc2cloud(*cloud); }); });
 }
 
 }  // namespace plumb::cli

@@ -286,7 +286,7 @@ void register_lio_command(CLI::App& app) {
   cmd->add_flag("--icp-only", o->icp_only,
                 "Hybrid ICP frames use the ICP residuals alone (Zhou et al. 2021, eq. 21: E_B + E_L2), "
                 "not with the LOAM ones the map still gives");
-  cmd->callback([o]() { run(*o); });
+  cmd->callback([o]() { naming_inputs({o->dump_dir}, [&] { run(*o); }); });
 }
 
 }  // namespace plumb::cli

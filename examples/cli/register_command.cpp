@@ -36,7 +36,7 @@ struct RegisterOptions {
 
 /// Coarse voxel from the target's finite bounding box: 1/100 of its diagonal, so a 30 m room gets
 /// ~0.3 m and a 0.2 m object ~2 mm.
-double default_voxel(const PointCloud& cloud) {
+double default_voxel(const PointCloud& cloud, const std::string& name) {
   Vector3f lo = Vector3f::Constant(std::numeric_limits<float>::infinity());
   Vector3f hi = -lo;
   for (const Vector3f& p : cloud.points) {
@@ -45,7 +45,8 @@ double default_voxel(const PointCloud& cloud) {
     hi = hi.cwiseMax(p);
   }
   const double diag = (hi - lo).cast<double>().norm();
-  PLUMB_CHECK(std::isfinite(diag) && diag > 0.0, "register: the target has no extent (empty or a single point)");
+  PLUMB_CHECK(std::isfinite(diag) && diag > 0.0,
+              name << ": the target has no extent (all its finite points coincide) to size --voxel from");
   return diag / 100.0;
 }
 
@@ -54,7 +55,7 @@ void run_register(const RegisterOptions& o) {
   const PointCloud target = io::read_cloud(o.target_path);
   PLUMB_CHECK(!source.empty(), o.source_path << ": no points");
   PLUMB_CHECK(!target.empty(), o.target_path << ": no points");
-  const double voxel = o.voxel > 0.0 ? o.voxel : default_voxel(target);
+  const double voxel = o.voxel > 0.0 ? o.voxel : default_voxel(target, o.target_path);
   LocalizeSettings settings = localize_settings_for_voxel(voxel);
   settings.sac_ia.seed = o.seed;
   const LocalizeResult r = localize_coarse_to_fine(source, target, settings);
@@ -111,7 +112,7 @@ void register_register_command(CLI::App& app) {
       ->check(positive_number(1e4));
   cmd->add_option("--seed", opts->seed, "Random seed of SAC-IA (default 42)")->check(non_negative_number());
   cmd->add_flag("--json", opts->json, "Print the result as JSON");
-  cmd->callback([opts] { run_register(*opts); });
+  cmd->callback([opts] { naming_inputs({opts->source_path, opts->target_path}, [&] { run_register(*opts); }); });
 }
 
 }  // namespace plumb::cli

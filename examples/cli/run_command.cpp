@@ -110,7 +110,7 @@ void register_run_command(CLI::App& app) {
   cmd->add_option("--correct-every", o->correct_every, "BIM correction every k-th frame")
       ->check(finite_number(1, 1000))
       ->capture_default_str();
-  cmd->callback([o]() { run(*o); });
+  cmd->callback([o]() { naming_inputs({o->dump_dir, o->model}, [&] { run(*o); }); });
 }
 
 }  // namespace plumb::cli

@@ -112,7 +112,7 @@ void register_scan2d_command(CLI::App& app) {
                   "Laser mounting pose on the robot: x y [m] (within 100 m) theta [rad] (within 2 pi)")
       ->expected(3)
       ->check(finite_number(-100.0, 100.0));
-  cmd->callback([opts] { run_scan2d(*opts); });
+  cmd->callback([opts] { naming_inputs({opts->log_path}, [&] { run_scan2d(*opts); }); });
 }
 
 }  // namespace plumb::cli

@@ -109,7 +109,7 @@ void register_segment_command(CLI::App& app) {
                   "Write one label per input point, in input order (0 decoration, 1 ground, 2 vertical)");
   cmd->add_option("--scan-out", opts->scan_out, "Write the frame's planar scan as CSV (beam,angle,range,x,y)");
   cmd->add_flag("--json", opts->json, "Print a JSON summary");
-  cmd->callback([opts] { run_segment(*opts); });
+  cmd->callback([opts] { naming_inputs({opts->cloud_path}, [&] { run_segment(*opts); }); });
 }
 
 }  // namespace plumb::cli

@@ -11,7 +11,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -25,12 +24,11 @@
 #include "plumb/bim/ifc.hpp"
 #include "plumb/bim/mesh.hpp"
 #include "plumb/core/error.hpp"
+#include "plumb/sim/lidar_model_json.hpp"
 #include "plumb/sim/scenario.hpp"
 
 namespace plumb::cli {
 namespace {
-
-constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 
 struct SimulateOptions {
   std::string model_path;
@@ -53,59 +51,12 @@ struct SimulateOptions {
 
 /// A LiDAR from a JSON file: {"name", "elevations_deg" | "elevations_rad", "columns", "rate_hz",
 /// "min_range", "max_range", "range_sigma", "dropout"}; or {"preset": NAME, ...overrides}.
-sim::LidarModel lidar_from_json(const std::string& path) {
-  std::ifstream in(path);
-  PLUMB_CHECK(in.is_open(), path << ": cannot open LiDAR model file");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {
-    PLUMB_THROW(path << ": not valid JSON: " << e.what());
-  }
-  PLUMB_CHECK(j.is_object(), path << ": the LiDAR model must be a JSON object");
-  sim::LidarModel m;
-  try {
-    if (j.contains("preset")) m = sim::lidar_preset(j.at("preset").get<std::string>());
-    m.name = j.value("name", m.name.empty() ? std::string("custom") : m.name);
-    if (j.contains("elevations_deg")) {
-      m.elevations_rad.clear();
-      for (double d : j.at("elevations_deg").get<std::vector<double>>()) m.elevations_rad.push_back(d * kDegToRad);
-    } else if (j.contains("elevations_rad")) {
-      m.elevations_rad = j.at("elevations_rad").get<std::vector<double>>();
-    }
-    if (j.contains("columns")) {
-      // Read as an integer in range before converting: a fractional, boolean or huge value would be
-      // truncated, wrapped or (1e10 -> int) undefined.
-      const nlohmann::json& c = j.at("columns");
-      PLUMB_CHECK(c.is_number_integer() && c.get<std::int64_t>() >= 1 &&
-                      c.get<std::int64_t>() <= sim::LidarModel::kMaxColumns,
-                  path << ": \"columns\" must be a whole number in [1, " << sim::LidarModel::kMaxColumns << "], got "
-                       << c.dump());
-      m.columns = static_cast<int>(c.get<std::int64_t>());
-    }
-    m.rate_hz = j.value("rate_hz", m.rate_hz);
-    m.min_range = j.value("min_range", m.min_range);
-    m.max_range = j.value("max_range", m.max_range);
-    m.range_sigma = j.value("range_sigma", m.range_sigma);
-    m.dropout = j.value("dropout", m.dropout);
-  } catch (const nlohmann::json::exception& e) {
-    PLUMB_THROW(path << ": bad LiDAR model: " << e.what());
-  }
-  PLUMB_CHECK(!m.elevations_rad.empty(), path << ": the LiDAR model needs \"elevations_deg\" or \"elevations_rad\"");
-  try {
-    m.validate();
-  } catch (const Error& e) {
-    PLUMB_THROW(path << ": " << e.what());
-  }
-  return m;
-}
-
 void run_simulate(const SimulateOptions& o) {
   const sim::ScenarioKind kind = sim::scenario_kind_from_string(o.scenario);
   sim::ScenarioSettings s = sim::scenario_defaults(kind);
   if (!o.lidar.empty()) {
     const bool is_file = o.lidar.size() > 5 && o.lidar.substr(o.lidar.size() - 5) == ".json";
-    s.lidar = is_file ? lidar_from_json(o.lidar) : sim::lidar_preset(o.lidar);
+    s.lidar = is_file ? sim::read_lidar_model(o.lidar) : sim::lidar_preset(o.lidar);
   }
   if (!o.imu.empty()) {
     const double rate = s.imu.rate_hz;
@@ -195,7 +146,7 @@ void register_simulate_command(CLI::App& app) {
   cmd->add_flag("--overwrite", opts->overwrite,
                 "Write into a non-empty directory: every frame dump file in it is replaced (other files are kept)");
   cmd->add_flag("--json", opts->json, "Print a JSON summary");
-  cmd->callback([opts] { run_simulate(*opts); });
+  cmd->callback([opts] { naming_inputs({opts->model_path, opts->lidar}, [&] { run_simulate(*opts); }); });
 }
 
 }  // namespace plumb::cli

@@ -12,13 +12,6 @@ namespace plumb::sim {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kDeg = kPi / 180.0;
-
-std::vector<double> even_rows(int n, double lo_deg, double hi_deg) {
-  std::vector<double> el(static_cast<std::size_t>(n));
-  for (int i = 0; i < n; ++i) el[static_cast<std::size_t>(i)] = (lo_deg + (hi_deg - lo_deg) * i / (n - 1)) * kDeg;
-  return el;
-}
 
 /// Reflectivity of each class, scaled so a head-on return reads 255 * albedo.
 float albedo_of(SimLabel label) {
@@ -32,67 +25,6 @@ float albedo_of(SimLabel label) {
 }
 
 }  // namespace
-
-void LidarModel::validate() const {
-  PLUMB_CHECK(!elevations_rad.empty(), "LidarModel '" << name << "': elevations_rad is empty");
-  PLUMB_CHECK(elevations_rad.size() <= 65535, "LidarModel '" << name << "': " << elevations_rad.size()
-                                                             << " rows exceed the 16-bit ring index");
-  for (std::size_t r = 0; r < elevations_rad.size(); ++r) {
-    PLUMB_CHECK(std::isfinite(elevations_rad[r]) && std::abs(elevations_rad[r]) <= 0.5 * kPi,
-                "LidarModel '" << name << "': elevations_rad[" << r << "] = " << elevations_rad[r]
-                               << " is not in [-pi/2, pi/2]");
-  }
-  PLUMB_CHECK(columns >= 1 && columns <= kMaxColumns,
-              "LidarModel '" << name << "': columns " << columns << " must be in [1, " << kMaxColumns << "]");
-  PLUMB_CHECK(num_rays() <= kMaxRaysPerSweep, "LidarModel '" << name << "': " << num_rays()
-                                                             << " rays per sweep (rows x columns) exceed "
-                                                             << kMaxRaysPerSweep);
-  PLUMB_CHECK(std::isfinite(rate_hz) && rate_hz >= kMinRateHz && rate_hz <= kMaxRateHz,
-              "LidarModel '" << name << "': rate_hz " << rate_hz << " must be in [" << kMinRateHz << ", "
-                             << kMaxRateHz << "] Hz");
-  PLUMB_CHECK(std::isfinite(min_range) && min_range >= 0.0,
-              "LidarModel '" << name << "': min_range " << min_range << " must be >= 0");
-  PLUMB_CHECK(max_range > min_range && !std::isnan(max_range),
-              "LidarModel '" << name << "': max_range " << max_range << " must exceed min_range " << min_range);
-  PLUMB_CHECK(std::isfinite(range_sigma) && range_sigma >= 0.0,
-              "LidarModel '" << name << "': range_sigma " << range_sigma << " must be >= 0");
-  PLUMB_CHECK(dropout >= 0.0 && dropout <= 1.0, "LidarModel '" << name << "': dropout " << dropout << " not in [0, 1]");
-  PLUMB_CHECK(std::isfinite(azimuth_offset_rad), "LidarModel '" << name << "': azimuth_offset_rad is not finite");
-}
-
-std::vector<std::string> lidar_preset_names() { return {"rfans32", "vlp16", "os1-64"}; }
-
-LidarModel lidar_preset(const std::string& name) {
-  LidarModel m;
-  m.name = name;
-  if (name == "rfans32") {
-    m.elevations_rad = even_rows(32, -20.0, 10.0);
-    m.columns = 2000;
-    m.rate_hz = 10.0;
-    m.min_range = 0.3;
-    m.max_range = 150.0;
-    m.range_sigma = 0.02;
-  } else if (name == "vlp16") {
-    m.elevations_rad = even_rows(16, -15.0, 15.0);
-    m.columns = 1800;
-    m.rate_hz = 10.0;
-    m.min_range = 0.5;
-    m.max_range = 100.0;
-    m.range_sigma = 0.03;
-  } else if (name == "os1-64") {
-    m.elevations_rad = even_rows(64, -16.6, 16.6);
-    m.columns = 1024;
-    m.rate_hz = 10.0;
-    m.min_range = 0.3;
-    m.max_range = 120.0;
-    m.range_sigma = 0.03;
-  } else {
-    std::ostringstream known;
-    for (const std::string& n : lidar_preset_names()) known << (known.tellp() > 0 ? ", " : "") << n;
-    PLUMB_THROW("lidar_preset: unknown LiDAR '" << name << "' (known: " << known.str() << ")");
-  }
-  return m;
-}
 
 PointCloud simulate_sweep(const World& world, const LidarModel& lidar,
                           const std::function<Eigen::Isometry3d(double)>& T_world_lidar, double stamp, Rng& rng,

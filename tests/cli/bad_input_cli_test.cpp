@@ -276,6 +276,33 @@ TEST_F(CliTest, RegisterFailedStatusExitsThreeAndSaysWhy) {
   EXPECT_EQ(nlohmann::json::parse(r.out).at("status"), "insufficient_data");  // the result, for diagnosis
 }
 
+// Errors raised deep in the library (a voxel grid whose keys would overflow, a cloud without
+// extent) cannot know the file their data came from; the CLI names the command's inputs for them.
+TEST_F(CliTest, LibraryErrorsNameTheCommandsInputs) {
+  PointCloud same;
+  same.points = {Vector3f(1, 2, 3), Vector3f(1, 2, 3)};
+  const std::string point = test::temp_path("bad_input_point.pcd");
+  io::write_cloud(point, same);
+  RunResult r = run_cli("register " + quote(small_cloud()) + ' ' + quote(point));
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_TRUE(contains(r.err, "plumb: error: " + point + ": the target has no extent")) << r.err;
+
+  PointCloud wide;
+  for (int i = 0; i < 50; ++i) {
+    const float f = static_cast<float>(i);
+    wide.points.emplace_back(400.0f * f, 0.0f, 0.01f * static_cast<float>(i % 7));
+    wide.points.emplace_back(0.0f, 400.0f * f, 0.0f);
+  }
+  const std::string wide_path = test::temp_path("bad_input_wide.pcd");
+  io::write_cloud(wide_path, wide);
+  r = run_cli("register " + quote(wide_path) + ' ' + quote(small_cloud()) + " --voxel 1e-7");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  // The library's message, prefixed with both inputs (each once), not the bare "voxel_grid: ...".
+  EXPECT_TRUE(contains(r.err, "plumb: error: " + wide_path + ", " + small_cloud() + ": voxel_grid:")) << r.err;
+  r = run_cli("register " + quote(wide_path) + ' ' + quote(wide_path) + " --voxel 1e-7");
+  EXPECT_TRUE(contains(r.err, "plumb: error: " + wide_path + ": voxel_grid:")) << r.err;
+}
+
 TEST_F(CliTest, CloudCommandOptionsRejectNanInf) {
   const std::string cloud = quote(small_cloud());
   const std::vector<std::pair<std::string, std::string>> cases = {

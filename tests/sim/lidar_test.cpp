@@ -3,11 +3,13 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "plumb/bim/mesh.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/core/rng.hpp"
 #include "plumb/sim/lidar.hpp"
+#include "plumb/sim/lidar_model_json.hpp"
 #include "plumb/sim/world.hpp"
 
 using plumb::PointCloud;
@@ -299,4 +301,72 @@ TEST(LidarTest, BadInputThrows) {
   // Outside an empty world nothing returns.
   const World empty(BimMesh{}, WorldSettings{});
   EXPECT_TRUE(simulate_sweep(empty, lidar, T, 0.0, rng).empty());
+}
+
+// ---- the LiDAR model file (plumb simulate --lidar FILE.json) ---------------------------------------
+
+namespace {
+
+std::string rows_json(std::size_t rows, const std::string& columns) {
+  std::string text = "{\"name\": \"big\", \"elevations_deg\": [";
+  for (std::size_t r = 0; r < rows; ++r) {
+    text += (r > 0 ? ", " : "") + std::to_string(-30.0 + 60.0 * static_cast<double>(r) / static_cast<double>(rows));
+  }
+  return text + "], \"columns\": " + columns + "}";
+}
+
+std::string error_of(const std::string& text) {
+  try {
+    parse_lidar_model(text, "model.json");
+  } catch (const plumb::Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(LidarModelJsonTest, PresetAndFieldsAreReadAsWritten) {
+  const LidarModel m = parse_lidar_model(R"({"preset": "vlp16", "columns": 900, "dropout": 0.25})", "m.json");
+  const LidarModel vlp16 = lidar_preset("vlp16");
+  EXPECT_EQ(m.elevations_rad, vlp16.elevations_rad);
+  EXPECT_EQ(m.columns, 900);
+  EXPECT_EQ(m.dropout, 0.25);
+  EXPECT_EQ(m.max_range, vlp16.max_range);
+  const LidarModel d = parse_lidar_model(R"({"elevations_deg": [-90, 0, 45], "rate_hz": 20})", "d.json");
+  ASSERT_EQ(d.elevations_rad.size(), 3u);
+  EXPECT_DOUBLE_EQ(d.elevations_rad[0], -M_PI / 2);
+  EXPECT_DOUBLE_EQ(d.elevations_rad[2], M_PI / 4);
+  EXPECT_EQ(d.name, "custom");
+  EXPECT_EQ(d.rate_hz, 20.0);
+  const LidarModel r = parse_lidar_model(R"({"elevations_rad": [0.1], "columns": 7})", "r.json");
+  EXPECT_EQ(r.elevations_rad, std::vector<double>{0.1});
+}
+
+// The largest legal model (65535 rows x 64 columns, just under 2^22 rays) is read; one row, one
+// column or one ray more is refused by name, before anything of its size is built.
+TEST(LidarModelJsonTest, LargestLegalModelIsReadAndOneMoreIsRefused) {
+  const LidarModel m = parse_lidar_model(rows_json(LidarModel::kMaxRows, "64"), "big.json");
+  EXPECT_EQ(m.elevations_rad.size(), LidarModel::kMaxRows);
+  EXPECT_LE(m.num_rays(), LidarModel::kMaxRaysPerSweep);
+  const std::string rows = error_of(rows_json(LidarModel::kMaxRows + 1, "1"));
+  EXPECT_EQ(rows.rfind("model.json: ", 0), 0u) << rows;
+  EXPECT_NE(rows.find("at most 65535"), std::string::npos) << rows;
+  const std::string rays = error_of(rows_json(LidarModel::kMaxRows, "65"));
+  EXPECT_NE(rays.find("rays per sweep"), std::string::npos) << rays;
+  const std::string columns = error_of(R"({"elevations_deg": [0], "columns": 100001})");
+  EXPECT_NE(columns.find("\"columns\" must be a whole number in [1, 100000]"), std::string::npos) << columns;
+}
+
+TEST(LidarModelJsonTest, BadFilesAreNamedWithLineAndColumn) {
+  const std::string syntax = error_of("{\n  \"columns\": 10,\n  oops\n}");
+  EXPECT_EQ(syntax.rfind("model.json: not valid JSON", 0), 0u) << syntax;
+  EXPECT_NE(syntax.find("line 3"), std::string::npos) << syntax;
+  for (const char* text : {"[1, 2]", R"({"elevations_deg": "low"})", R"({"elevations_deg": [0], "rate_hz": "fast"})",
+                           R"({"preset": "hdl64"})", R"({"columns": 10})", R"({"elevations_deg": [0], "rate_hz": 0.5})",
+                           R"({"elevations_deg": [100]})", R"({"elevations_deg": [0], "columns": 2.5})", "{}", ""}) {
+    const std::string e = error_of(text);
+    EXPECT_EQ(e.rfind("model.json: ", 0), 0u) << text << " -> " << e;
+  }
+  EXPECT_THROW(read_lidar_model(std::string(PLUMB_BINARY_DIR) + "/no_such_lidar.json"), plumb::Error);
 }

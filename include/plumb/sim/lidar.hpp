@@ -39,6 +39,7 @@ struct LidarModel {
   /// Limits validate() enforces: every sweep and every simulation stays bounded (real spinning
   /// LiDARs turn at 5-20 Hz and fire at most a few hundred thousand rays per sweep).
   static constexpr double kMinRateHz = 1.0, kMaxRateHz = 100.0;
+  static constexpr std::size_t kMaxRows = 65535;  ///< the ring index is 16 bits
   static constexpr int kMaxColumns = 100000;
   static constexpr std::size_t kMaxRaysPerSweep = std::size_t{1} << 22;
   /// @brief Throw plumb::Error naming the field when a value is out of range (see the limits above).
