@@ -21,6 +21,7 @@
 #include "plumb/io/trajectory.hpp"
 #include "scan2d/scan_sim.hpp"
 #include "test_data.hpp"
+#include "test_util.hpp"
 
 namespace plumb {
 namespace {
@@ -32,17 +33,6 @@ using test::run_cli;
 std::string quote(const std::string& s) { return "'" + s + "'"; }
 
 bool contains(const std::string& text, const std::string& what) { return text.find(what) != std::string::npos; }
-
-/// A turning path (a circle arc rising in z), 10 Hz stamps from 100 s: alignable in SE(3) and Sim(3).
-Trajectory circle(int n, double stamp_scale = 1.0) {
-  Trajectory t;
-  for (int i = 0; i < n; ++i) {
-    const double a = 0.05 * i;
-    t.push_back((100.0 + 0.1 * i) * stamp_scale,
-                se3::make(so3::exp(Vector3d(0, 0, a)), Vector3d(5 * std::cos(a), 5 * std::sin(a), 0.01 * i)));
-  }
-  return t;
-}
 
 /// Writes the lines of a TUM file (no header), so a test knows each pose's line number (1-based).
 std::string write_lines(const std::string& name, const std::vector<std::string>& lines) {
@@ -67,14 +57,14 @@ std::vector<std::string> tum_lines(const Trajectory& t) {
 
 /// The reference both eval tests compare against.
 std::string reference_file() {
-  static const std::string path = write_lines("bad_input_ref.tum", tum_lines(circle(200)));
+  static const std::string path = write_lines("bad_input_ref.tum", tum_lines(test::circle_trajectory(200)));
   return path;
 }
 
 // ---- eval: trajectories that would give numbers that look valid --------------------------------
 
 TEST_F(CliTest, EvalStampsInMillisecondsAgainstSecondsFailNamingBothCounts) {
-  const std::string est = write_lines("bad_input_est_ms.tum", tum_lines(circle(200, 1000.0)));
+  const std::string est = write_lines("bad_input_est_ms.tum", tum_lines(test::circle_trajectory(200, 1000.0)));
   for (const char* format : {"", " --json"}) {
     const RunResult r = run_cli("eval " + quote(est) + ' ' + quote(reference_file()) + format);
     EXPECT_EQ(r.exit_code, 1) << r.err;
@@ -87,7 +77,7 @@ TEST_F(CliTest, EvalStampsInMillisecondsAgainstSecondsFailNamingBothCounts) {
 
 TEST_F(CliTest, EvalPartialTimeOverlapBelowTheFractionFailsUnlessRelaxed) {
   // Only the last 40 of 200 estimate stamps fall in the reference's time range.
-  Trajectory late = circle(200);
+  Trajectory late = test::circle_trajectory(200);
   for (double& s : late.stamps) s += 16.0;
   const std::string est = write_lines("bad_input_est_late.tum", tum_lines(late));
   const RunResult r = run_cli("eval " + quote(est) + ' ' + quote(reference_file()));
@@ -99,7 +89,7 @@ TEST_F(CliTest, EvalPartialTimeOverlapBelowTheFractionFailsUnlessRelaxed) {
 }
 
 TEST_F(CliTest, EvalUnorderedStampsFailNamingFileAndLine) {
-  std::vector<std::string> lines = tum_lines(circle(50));
+  std::vector<std::string> lines = tum_lines(test::circle_trajectory(50));
   lines.insert(lines.begin(), "# stamp tx ty tz qx qy qz qw");
   std::swap(lines[10], lines[30]);  // line 11 now holds a later stamp than line 12
   const std::string est = write_lines("bad_input_unordered.tum", lines);
@@ -108,7 +98,7 @@ TEST_F(CliTest, EvalUnorderedStampsFailNamingFileAndLine) {
   EXPECT_TRUE(contains(r.err, est + ":12:")) << r.err;
   EXPECT_TRUE(contains(r.err, "strictly increase")) << r.err;
   // A repeated stamp is refused as well.
-  std::vector<std::string> repeated = tum_lines(circle(5));
+  std::vector<std::string> repeated = tum_lines(test::circle_trajectory(5));
   repeated.push_back(repeated.back());
   const std::string dup = write_lines("bad_input_repeated.tum", repeated);
   const RunResult d = run_cli("eval " + quote(dup) + ' ' + quote(reference_file()));
@@ -119,7 +109,7 @@ TEST_F(CliTest, EvalUnorderedStampsFailNamingFileAndLine) {
 TEST_F(CliTest, EvalKittiTimesFileOutOfOrderFailsNamingFileAndLine) {
   const std::string poses = test::temp_path("bad_input_poses.kitti");
   const std::string times = write_lines("bad_input_times.txt", {"0.0", "0.1", "0.3", "0.2"});
-  Trajectory t = circle(4);
+  Trajectory t = test::circle_trajectory(4);
   t.stamps.clear();
   io::write_kitti(t, poses);
   const RunResult r = run_cli("eval " + quote(poses) + ' ' + quote(poses) + " --format kitti --est-times " +
@@ -130,7 +120,7 @@ TEST_F(CliTest, EvalKittiTimesFileOutOfOrderFailsNamingFileAndLine) {
 
 TEST_F(CliTest, EvalHugeOrNonFiniteCoordinatesFailNamingFileAndLine) {
   for (const char* value : {"1e300", "-3e9", "nan", "inf"}) {
-    std::vector<std::string> lines = tum_lines(circle(20));
+    std::vector<std::string> lines = tum_lines(test::circle_trajectory(20));
     lines[7] = std::to_string(100.7) + " " + value + " 0 0 0 0 0 1";
     const std::string est = write_lines("bad_input_huge.tum", lines);
     const RunResult r = run_cli("eval " + quote(est) + ' ' + quote(reference_file()) + " --json");

@@ -15,35 +15,15 @@
 #include "plumb/eval/metrics.hpp"
 #include "plumb/io/trajectory.hpp"
 #include "test_data.hpp"
+#include "test_util.hpp"
 
 namespace plumb::eval {
 namespace {
 
-/// A turning, rising path with 10 Hz stamps from 100 s (times `stamp_scale`).
-Trajectory circle(int n, double stamp_scale = 1.0) {
-  Trajectory t;
-  for (int i = 0; i < n; ++i) {
-    const double a = 0.05 * i;
-    t.push_back((100.0 + 0.1 * i) * stamp_scale,
-                se3::make(so3::exp(Vector3d(0, 0, a)), Vector3d(5 * std::cos(a), 5 * std::sin(a), 0.01 * i)));
-  }
-  return t;
-}
-
-template <typename F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
-
 bool contains(const std::string& text, const std::string& what) { return text.find(what) != std::string::npos; }
 
 TEST(EvalBadInputTest, StampsInMillisecondsAgainstSecondsAreRefusedWithBothCounts) {
-  const std::string message = error_of([] { associate(circle(747, 1000.0), circle(747)); });
+  const std::string message = test::error_of([] { associate(test::circle_trajectory(747, 1000.0), test::circle_trajectory(747)); });
   EXPECT_TRUE(contains(message, "only 0 pose pairs")) << message;
   EXPECT_TRUE(contains(message, "the 747 poses")) << message;
   EXPECT_TRUE(contains(message, "same clock")) << message;
@@ -51,38 +31,38 @@ TEST(EvalBadInputTest, StampsInMillisecondsAgainstSecondsAreRefusedWithBothCount
 
 TEST(EvalBadInputTest, TooFewPairsAbsoluteAndAsAShare) {
   // 40 of 200 overlap in time: below the default half, accepted when the share is relaxed.
-  Trajectory late = circle(200);
+  Trajectory late = test::circle_trajectory(200);
   for (double& s : late.stamps) s += 16.0;
-  EXPECT_TRUE(contains(error_of([&] { associate(late, circle(200)); }), "only 40 pose pairs"));
+  EXPECT_TRUE(contains(test::error_of([&] { associate(late, test::circle_trajectory(200)); }), "only 40 pose pairs"));
   AssociationSettings relaxed;
   relaxed.min_pair_fraction = 0.1;
-  EXPECT_EQ(associate(late, circle(200), relaxed).estimate.size(), 40u);
+  EXPECT_EQ(associate(late, test::circle_trajectory(200), relaxed).estimate.size(), 40u);
   // Two poses are below the absolute minimum whatever the share; by index as well.
-  EXPECT_TRUE(contains(error_of([] { associate(circle(2), circle(2)); }), "only 2 pose pairs"));
-  Trajectory no_stamps = circle(2);
+  EXPECT_TRUE(contains(test::error_of([] { associate(test::circle_trajectory(2), test::circle_trajectory(2)); }), "only 2 pose pairs"));
+  Trajectory no_stamps = test::circle_trajectory(2);
   no_stamps.stamps.clear();
-  EXPECT_TRUE(contains(error_of([&] { associate(no_stamps, no_stamps); }), "paired by index"));
+  EXPECT_TRUE(contains(test::error_of([&] { associate(no_stamps, no_stamps); }), "paired by index"));
   relaxed.min_pairs = 2;
-  EXPECT_EQ(associate(circle(2), circle(2), relaxed).estimate.size(), 2u);
+  EXPECT_EQ(associate(test::circle_trajectory(2), test::circle_trajectory(2), relaxed).estimate.size(), 2u);
   AssociationSettings nan_settings;
   nan_settings.max_time_difference = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_THROW(associate(circle(10), circle(10), nan_settings), Error);
+  EXPECT_THROW(associate(test::circle_trajectory(10), test::circle_trajectory(10), nan_settings), Error);
 }
 
 TEST(EvalBadInputTest, StampsThatDoNotIncreaseAreRefused) {
-  Trajectory unordered = circle(50);
+  Trajectory unordered = test::circle_trajectory(50);
   std::swap(unordered.stamps[10], unordered.stamps[30]);
-  const std::string message = error_of([&] { associate(unordered, circle(50)); });
+  const std::string message = test::error_of([&] { associate(unordered, test::circle_trajectory(50)); });
   EXPECT_TRUE(contains(message, "estimate stamps do not strictly increase: pose 11")) << message;
-  Trajectory repeated = circle(50);
+  Trajectory repeated = test::circle_trajectory(50);
   repeated.stamps[20] = repeated.stamps[19];
-  EXPECT_TRUE(contains(error_of([&] { associate(circle(50), repeated); }), "reference stamps")) << message;
+  EXPECT_TRUE(contains(test::error_of([&] { associate(test::circle_trajectory(50), repeated); }), "reference stamps")) << message;
 }
 
 TEST(EvalBadInputTest, NonFinitePosesAndErrorsAreRefused) {
-  Trajectory bad = circle(20);
+  Trajectory bad = test::circle_trajectory(20);
   bad.poses[5].translation().x() = std::numeric_limits<double>::infinity();
-  EXPECT_TRUE(contains(error_of([&] { associate(bad, circle(20)); }), "estimate pose 5 is not finite"));
+  EXPECT_TRUE(contains(test::error_of([&] { associate(bad, test::circle_trajectory(20)); }), "estimate pose 5 is not finite"));
   EXPECT_THROW(compute_stats({1.0, std::numeric_limits<double>::infinity()}), Error);
   EXPECT_THROW(compute_stats({1.0, std::numeric_limits<double>::quiet_NaN()}), Error);
   std::vector<Vector3d> points = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0)};
@@ -100,20 +80,20 @@ TEST(EvalBadInputTest, CollinearOrTooFewPositionsGiveADegenerateAlignmentStatus)
     settings.align = mode;
     EXPECT_EQ(compute_ape(line, line, settings).status, Status::kDegenerate) << to_string(mode);
   }
-  const Trajectory two = circle(2);
+  const Trajectory two = test::circle_trajectory(2);
   EXPECT_EQ(compute_ape(two, two).status, Status::kDegenerate);
-  const Trajectory one = circle(1);
+  const Trajectory one = test::circle_trajectory(1);
   EXPECT_EQ(compute_ape(one, one).status, Status::kInsufficientData);
-  EXPECT_EQ(compute_ape(circle(20), circle(20)).status, Status::kOk);
+  EXPECT_EQ(compute_ape(test::circle_trajectory(20), test::circle_trajectory(20)).status, Status::kOk);
 }
 
 // ---- the trajectory readers -------------------------------------------------------------------
 
 TEST(EvalBadInputTest, TumReaderNamesLineOfAStampThatDoesNotIncrease) {
   const std::string text = "# t x y z qx qy qz qw\n1 0 0 0 0 0 0 1\n2 0 0 0 0 0 0 1\n1.5 0 0 0 0 0 0 1\n";
-  const std::string message = error_of([&] { io::parse_tum(text, "est.tum"); });
+  const std::string message = test::error_of([&] { io::parse_tum(text, "est.tum"); });
   EXPECT_TRUE(contains(message, "est.tum:4: stamp 1.5 is earlier than the stamp of line 3")) << message;
-  EXPECT_TRUE(contains(error_of([] { io::parse_tum("1 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n", "a.tum"); }),
+  EXPECT_TRUE(contains(test::error_of([] { io::parse_tum("1 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n", "a.tum"); }),
                        "a.tum:2: stamp 1 repeats"));
   io::TrajectoryReadSettings any_order;
   any_order.require_increasing_stamps = false;
@@ -122,24 +102,24 @@ TEST(EvalBadInputTest, TumReaderNamesLineOfAStampThatDoesNotIncrease) {
 
 TEST(EvalBadInputTest, ReadersRefuseAbsurdCoordinatesNamingTheLine) {
   const std::string tum = "1 0 0 0 0 0 0 1\n2 1e300 0 0 0 0 0 1\n";
-  EXPECT_TRUE(contains(error_of([&] { io::parse_tum(tum, "huge.tum"); }), "huge.tum:2: position"));
+  EXPECT_TRUE(contains(test::error_of([&] { io::parse_tum(tum, "huge.tum"); }), "huge.tum:2: position"));
   const std::string kitti = "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 -2e9\n";
-  EXPECT_TRUE(contains(error_of([&] { io::parse_kitti(kitti, "huge.txt"); }), "huge.txt:2: position"));
+  EXPECT_TRUE(contains(test::error_of([&] { io::parse_kitti(kitti, "huge.txt"); }), "huge.txt:2: position"));
   // UTM-sized coordinates are fine.
   EXPECT_EQ(io::parse_tum("1 500000 5400000 300 0 0 0 1\n", "utm.tum").size(), 1u);
 }
 
 TEST(EvalBadInputTest, TimesReaderNamesLineOfAStampThatDoesNotIncrease) {
-  EXPECT_TRUE(contains(error_of([] { io::parse_times("0\n0.1\n0.3\n0.2\n", "times.txt"); }), "times.txt:4:"));
+  EXPECT_TRUE(contains(test::error_of([] { io::parse_times("0\n0.1\n0.3\n0.2\n", "times.txt"); }), "times.txt:4:"));
 }
 
 TEST(EvalBadInputTest, ReadersSayADirectoryIsADirectory) {
   const std::string dir = test::temp_path("eval_bad_input_dir");
   std::filesystem::create_directories(dir);
-  EXPECT_TRUE(contains(error_of([&] { io::read_tum(dir); }), dir + ": is a directory"));
-  EXPECT_TRUE(contains(error_of([&] { io::read_kitti(dir); }), dir + ": is a directory"));
-  EXPECT_TRUE(contains(error_of([&] { io::read_times(dir); }), dir + ": is a directory"));
-  EXPECT_TRUE(contains(error_of([&] { io::read_tum(dir + "/missing.tum"); }), "missing.tum: no such file"));
+  EXPECT_TRUE(contains(test::error_of([&] { io::read_tum(dir); }), dir + ": is a directory"));
+  EXPECT_TRUE(contains(test::error_of([&] { io::read_kitti(dir); }), dir + ": is a directory"));
+  EXPECT_TRUE(contains(test::error_of([&] { io::read_times(dir); }), dir + ": is a directory"));
+  EXPECT_TRUE(contains(test::error_of([&] { io::read_tum(dir + "/missing.tum"); }), "missing.tum: no such file"));
 }
 
 }  // namespace

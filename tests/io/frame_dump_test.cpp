@@ -11,6 +11,7 @@
 #include "plumb/core/error.hpp"
 #include "plumb/core/rng.hpp"
 #include "test_data.hpp"
+#include "test_util.hpp"
 
 namespace plumb::io {
 namespace {
@@ -21,22 +22,6 @@ std::string fresh_dir(const std::string& name) {
   const std::string dir = test::temp_path("frame_dump_" + name);
   fs::remove_all(dir);
   return dir;
-}
-
-void write_text(const std::string& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-}
-
-/// The message of the plumb::Error thrown by f, or "" when nothing was thrown.
-template <class F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
 }
 
 Eigen::Isometry3d some_pose(double yaw, const Vector3d& t) {
@@ -174,8 +159,8 @@ TEST(FrameDumpTest, MinimalUserDumpReadsWithDefaults) {
   // A user's own dump: a meta.json with only the LiDAR extrinsics, frames.csv and no other file.
   const std::string dir = fresh_dir("minimal");
   fs::create_directories(dir + "/scans");
-  write_text(dir + "/meta.json", "{\"T_base_lidar\": [1,0,0,0.5, 0,1,0,0, 0,0,1,1.2, 0,0,0,1]}");
-  write_text(dir + "/frames.csv", "# my robot\nindex,stamp,file\r\n0,10.0,scans/a.pcd\r\n1,10.1,scans/b.pcd\r\n");
+  test::write_text(dir + "/meta.json", "{\"T_base_lidar\": [1,0,0,0.5, 0,1,0,0, 0,0,1,1.2, 0,0,0,1]}");
+  test::write_text(dir + "/frames.csv", "# my robot\nindex,stamp,file\r\n0,10.0,scans/a.pcd\r\n1,10.1,scans/b.pcd\r\n");
   const FrameDumpReader reader(dir);
   EXPECT_EQ(reader.num_frames(), 2u);
   EXPECT_EQ(reader.meta().T_base_lidar.translation(), Vector3d(0.5, 0.0, 1.2));
@@ -186,14 +171,14 @@ TEST(FrameDumpTest, MinimalUserDumpReadsWithDefaults) {
   EXPECT_THROW(reader.imu(), Error);
   EXPECT_THROW(reader.stamp(2), Error);
   // The frame file itself is read only when asked for.
-  const std::string msg = error_of([&] { reader.frame(0); });
+  const std::string msg = test::error_of([&] { reader.frame(0); });
   EXPECT_NE(msg.find("a.pcd"), std::string::npos) << msg;
 }
 
 TEST(FrameDumpTest, MalformedMetaNamesFileLineAndColumn) {
   const std::string dir = fresh_dir("bad_meta");
   fs::create_directories(dir);
-  write_text(dir + "/frames.csv", "index,stamp,file\n");
+  test::write_text(dir + "/frames.csv", "index,stamp,file\n");
   struct Case {
     std::string json;
     std::string expected;  // substring of the message
@@ -219,8 +204,8 @@ TEST(FrameDumpTest, MalformedMetaNamesFileLineAndColumn) {
       {"{\"T_base_lidar\": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1], \"lidar\": {\"rate_hz\": -10}}", "rate_hz"},
   };
   for (const Case& c : cases) {
-    write_text(dir + "/meta.json", c.json);
-    const std::string msg = error_of([&] { FrameDumpReader r(dir); });
+    test::write_text(dir + "/meta.json", c.json);
+    const std::string msg = test::error_of([&] { FrameDumpReader r(dir); });
     EXPECT_NE(msg.find("meta.json"), std::string::npos) << c.json << " -> " << msg;
     EXPECT_NE(msg.find(c.expected), std::string::npos) << c.json << " -> " << msg;
   }
@@ -229,7 +214,7 @@ TEST(FrameDumpTest, MalformedMetaNamesFileLineAndColumn) {
 TEST(FrameDumpTest, MalformedCsvNamesFileAndLine) {
   const std::string dir = fresh_dir("bad_csv");
   fs::create_directories(dir);
-  write_text(dir + "/meta.json", frame_dump_meta_json(some_meta()));
+  test::write_text(dir + "/meta.json", frame_dump_meta_json(some_meta()));
   struct Case {
     std::string file, text, expected;
   };
@@ -242,32 +227,32 @@ TEST(FrameDumpTest, MalformedCsvNamesFileAndLine) {
       {"frames.csv", "", "frames.csv: empty file"},
   };
   for (const Case& c : frames_cases) {
-    write_text(dir + "/" + c.file, c.text);
-    const std::string msg = error_of([&] { FrameDumpReader r(dir); });
+    test::write_text(dir + "/" + c.file, c.text);
+    const std::string msg = test::error_of([&] { FrameDumpReader r(dir); });
     EXPECT_NE(msg.find(c.expected), std::string::npos) << c.text << " -> " << msg;
   }
-  write_text(dir + "/frames.csv", "index,stamp,file\n0,1.0,a.pcd\n");
+  test::write_text(dir + "/frames.csv", "index,stamp,file\n0,1.0,a.pcd\n");
   const FrameDumpReader reader(dir);
-  write_text(dir + "/imu.csv", "stamp,wx,wy,wz,ax,ay,az\n0.0,0,0,0,0,0,9.8\n0.005,0,0,0,0,9.8\n");
-  std::string msg = error_of([&] { reader.imu(); });
+  test::write_text(dir + "/imu.csv", "stamp,wx,wy,wz,ax,ay,az\n0.0,0,0,0,0,0,9.8\n0.005,0,0,0,0,9.8\n");
+  std::string msg = test::error_of([&] { reader.imu(); });
   EXPECT_NE(msg.find("imu.csv:3: expected 7"), std::string::npos) << msg;
-  write_text(dir + "/imu.csv", "stamp,wx,wy,wz,ax,ay,az\n0.0,0,0,0,0,0,9.8\n0.0,0,0,0,0,0,9.8\n");
-  msg = error_of([&] { reader.imu(); });
+  test::write_text(dir + "/imu.csv", "stamp,wx,wy,wz,ax,ay,az\n0.0,0,0,0,0,0,9.8\n0.0,0,0,0,0,0,9.8\n");
+  msg = test::error_of([&] { reader.imu(); });
   EXPECT_NE(msg.find("imu.csv:3: stamp"), std::string::npos) << msg;
-  write_text(dir + "/odom.csv", "stamp,x,y,theta\n0.0,1,2,x3\n");
-  msg = error_of([&] { reader.odometry(); });
+  test::write_text(dir + "/odom.csv", "stamp,x,y,theta\n0.0,1,2,x3\n");
+  msg = test::error_of([&] { reader.odometry(); });
   EXPECT_NE(msg.find("odom.csv:2: theta"), std::string::npos) << msg;
-  write_text(dir + "/wheels.csv", "stamp,left,right\n0.0,1\n");
-  msg = error_of([&] { reader.wheels(); });
+  test::write_text(dir + "/wheels.csv", "stamp,left,right\n0.0,1\n");
+  msg = test::error_of([&] { reader.wheels(); });
   EXPECT_NE(msg.find("wheels.csv:2"), std::string::npos) << msg;
-  write_text(dir + "/gt.tum", "0 1 2 3 0 0 0\n");
-  msg = error_of([&] { reader.ground_truth(); });
+  test::write_text(dir + "/gt.tum", "0 1 2 3 0 0 0\n");
+  msg = test::error_of([&] { reader.ground_truth(); });
   EXPECT_NE(msg.find("gt.tum:1"), std::string::npos) << msg;
 }
 
 TEST(FrameDumpTest, MissingDirectoryAndOverwriteAreErrors) {
   const std::string dir = fresh_dir("missing");
-  std::string msg = error_of([&] { FrameDumpReader r(dir); });
+  std::string msg = test::error_of([&] { FrameDumpReader r(dir); });
   EXPECT_NE(msg.find("meta.json"), std::string::npos) << msg;
   {
     FrameDumpWriter w(dir, some_meta());
@@ -278,7 +263,7 @@ TEST(FrameDumpTest, MissingDirectoryAndOverwriteAreErrors) {
     w.close();
     EXPECT_THROW(w.add_frame(2.0, c), Error);
   }
-  msg = error_of([&] { FrameDumpWriter w(dir, some_meta()); });
+  msg = test::error_of([&] { FrameDumpWriter w(dir, some_meta()); });
   EXPECT_NE(msg.find("refusing to overwrite"), std::string::npos) << msg;
   FrameDumpWriteSettings overwrite;
   overwrite.overwrite = true;
@@ -294,7 +279,7 @@ TEST(FrameDumpTest, OverwriteReplacesTheWholeDump) {
     for (int i = 0; i < 3; ++i) w.add_frame(1.0 + i, c);
     w.write_odometry({{1.0, Pose2{}}});
   }
-  write_text(dir + "/frames/notes.txt", "a user's file");
+  test::write_text(dir + "/frames/notes.txt", "a user's file");
   FrameDumpWriteSettings overwrite;
   overwrite.overwrite = true;
   {

@@ -12,6 +12,7 @@
 #include "plumb/core/lie.hpp"
 #include "plumb/core/rng.hpp"
 #include "test_data.hpp"
+#include "test_util.hpp"
 
 namespace plumb {
 namespace {
@@ -26,17 +27,6 @@ std::string write_file(const std::string& name, const std::string& text) {
 std::string read_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-// The message of the plumb::Error `fn` throws ("" if it throws nothing).
-template <typename Fn>
-std::string error_of(Fn&& fn) {
-  try {
-    fn();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
 }
 
 Trajectory random_trajectory(std::size_t n, std::uint64_t seed) {
@@ -95,42 +85,42 @@ TEST(TumTest, NormalizesNearlyUnitQuaternion) {
 
 TEST(TumTest, FarFromUnitQuaternionThrowsNamingLine) {
   const std::string path = write_file("far_quat.tum", "# c\n0 0 0 0 0 0 0 1\n1 0 0 0 0.5 0 0 0.5\n");
-  const std::string message = error_of([&] { io::read_tum(path); });
+  const std::string message = test::error_of([&] { io::read_tum(path); });
   EXPECT_NE(message.find(path + ":3:"), std::string::npos) << message;
   EXPECT_NE(message.find("quaternion"), std::string::npos) << message;
 }
 
 TEST(TumTest, ZeroQuaternionThrows) {
   const std::string path = write_file("zero_quat.tum", "0 1 2 3 0 0 0 0\n");
-  EXPECT_NE(error_of([&] { io::read_tum(path); }).find(path + ":1:"), std::string::npos);
+  EXPECT_NE(test::error_of([&] { io::read_tum(path); }).find(path + ":1:"), std::string::npos);
 }
 
 TEST(TumTest, WrongFieldCountThrowsNamingLine) {
   const std::string path = write_file("short.tum", "0 0 0 0 0 0 0 1\n\n1 0 0 0 0 0 1\n");
-  const std::string message = error_of([&] { io::read_tum(path); });
+  const std::string message = test::error_of([&] { io::read_tum(path); });
   EXPECT_NE(message.find(path + ":3:"), std::string::npos) << message;
   EXPECT_NE(message.find("expected 8 fields"), std::string::npos) << message;
   const std::string longer = write_file("long.tum", "0 0 0 0 0 0 0 1 9\n");
-  EXPECT_NE(error_of([&] { io::read_tum(longer); }).find(longer + ":1:"), std::string::npos);
+  EXPECT_NE(test::error_of([&] { io::read_tum(longer); }).find(longer + ":1:"), std::string::npos);
 }
 
 TEST(TumTest, NonNumericAndNonFiniteFieldsThrow) {
   for (const char* bad : {"0 0 x 0 0 0 0 1\n", "0 0 1.5e 0 0 0 0 1\n", "0 nan 0 0 0 0 0 1\n",
                           "inf 0 0 0 0 0 0 1\n", "0 0 0 0 0 0 0 1e999\n"}) {
     const std::string path = write_file("nonnumeric.tum", bad);
-    const std::string message = error_of([&] { io::read_tum(path); });
+    const std::string message = test::error_of([&] { io::read_tum(path); });
     EXPECT_NE(message.find(path + ":1:"), std::string::npos) << bad << " -> " << message;
   }
 }
 
 TEST(TumTest, EmptyAndMissingFilesThrow) {
   const std::string empty = write_file("empty.tum", "");
-  EXPECT_NE(error_of([&] { io::read_tum(empty); }).find(empty), std::string::npos);
+  EXPECT_NE(test::error_of([&] { io::read_tum(empty); }).find(empty), std::string::npos);
   const std::string comments = write_file("comments.tum", "# only\n\n# comments\r\n");
-  EXPECT_NE(error_of([&] { io::read_tum(comments); }).find("no poses"), std::string::npos);
+  EXPECT_NE(test::error_of([&] { io::read_tum(comments); }).find("no poses"), std::string::npos);
   const std::string missing = test::temp_path("traj_does_not_exist.tum");
   std::remove(missing.c_str());
-  EXPECT_NE(error_of([&] { io::read_tum(missing); }).find(missing), std::string::npos);
+  EXPECT_NE(test::error_of([&] { io::read_tum(missing); }).find(missing), std::string::npos);
 }
 
 TEST(TumTest, WriteWithoutStampsThrows) {
@@ -194,7 +184,7 @@ TEST(KittiTest, NonRotationThrowsNamingLine) {
   for (const char* bad : {"1.1 0 0 0 0 1.1 0 0 0 0 1.1 0\n", "1 0.2 0 0 0 1 0 0 0 0 1 0\n",
                           "1 0 0 0 0 1 0 0 0 0 -1 0\n", "0 0 0 0 0 0 0 0 0 0 0 0\n"}) {
     const std::string path = write_file("bad_rotation.kitti", ok + "\r\n" + bad);
-    const std::string message = error_of([&] { io::read_kitti(path); });
+    const std::string message = test::error_of([&] { io::read_kitti(path); });
     EXPECT_NE(message.find(path + ":3:"), std::string::npos) << bad << " -> " << message;
     EXPECT_NE(message.find("rotation"), std::string::npos) << message;
   }
@@ -204,18 +194,18 @@ TEST(KittiTest, MalformedLinesThrowNamingLine) {
   const std::string ok = "1 0 0 0 0 1 0 0 0 0 1 0\n";
   for (const char* bad : {"1 0 0 0 0 1 0 0 0 0 1\n", "1 0 0 0 0 1 0 0 0 0 1 0 5\n", "1 0 0 0 0 1 0 0 0 0 1 abc\n"}) {
     const std::string path = write_file("malformed.kitti", ok + ok + bad);
-    EXPECT_NE(error_of([&] { io::read_kitti(path); }).find(path + ":3:"), std::string::npos) << bad;
+    EXPECT_NE(test::error_of([&] { io::read_kitti(path); }).find(path + ":3:"), std::string::npos) << bad;
   }
 }
 
 TEST(KittiTest, TimesCountMismatchAndBadTimesThrow) {
   const std::string path = write_file("two.kitti", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 1 0 1 0 0 0 0 1 0\n");
   const std::string three = write_file("three_times.txt", "0\n0.1\n0.2\n");
-  EXPECT_NE(error_of([&] { io::read_kitti(path, three); }).find(three), std::string::npos);
+  EXPECT_NE(test::error_of([&] { io::read_kitti(path, three); }).find(three), std::string::npos);
   const std::string bad = write_file("bad_times.txt", "0\n0.1 0.2\n");
-  EXPECT_NE(error_of([&] { io::read_kitti(path, bad); }).find(bad + ":2:"), std::string::npos);
+  EXPECT_NE(test::error_of([&] { io::read_kitti(path, bad); }).find(bad + ":2:"), std::string::npos);
   const std::string empty = write_file("empty.kitti", "\n\n");
-  EXPECT_NE(error_of([&] { io::read_kitti(empty); }).find(empty), std::string::npos);
+  EXPECT_NE(test::error_of([&] { io::read_kitti(empty); }).find(empty), std::string::npos);
   EXPECT_THROW(io::read_kitti(test::temp_path("traj_missing.kitti")), Error);
 }
 
