@@ -74,7 +74,8 @@ CorrelativeMap2D::CorrelativeMap2D(const std::vector<Vector2d>& map_points, cons
 
   levels_.resize(static_cast<std::size_t>(s.levels));
   Level& base = levels_[0];
-  base.value.assign(static_cast<std::size_t>(channels), std::vector<std::uint8_t>(cells, 0));
+  cells_ = cells;
+  base.value.assign(static_cast<std::size_t>(channels) * cells, 0);
   base.allowed.assign(cells, 0);
   // Occupied cells per channel (a map point with a normal enters its sector and both neighbours,
   // so a scan normal up to 1.5 sectors off still meets it; every point enters "any"), then a
@@ -110,7 +111,7 @@ CorrelativeMap2D::CorrelativeMap2D(const std::vector<Vector2d>& map_points, cons
   }
   for (int c = 0; c < channels; ++c) {
     const std::vector<std::uint8_t>& occ = occupied[static_cast<std::size_t>(c)];
-    std::vector<std::uint8_t>& value = base.value[static_cast<std::size_t>(c)];
+    std::uint8_t* value = &base.value[static_cast<std::size_t>(c) * cells];
     for (int iy = 0; iy < height_; ++iy) {
       for (int ix = 0; ix < width_; ++ix) {
         if (!occ[static_cast<std::size_t>(iy) * width_ + ix]) continue;
@@ -142,7 +143,7 @@ CorrelativeMap2D::CorrelativeMap2D(const std::vector<Vector2d>& map_points, cons
   for (int h = 1; h < s.levels; ++h) {
     const Level& prev = levels_[static_cast<std::size_t>(h - 1)];
     Level& cur = levels_[static_cast<std::size_t>(h)];
-    cur.value.assign(static_cast<std::size_t>(channels), std::vector<std::uint8_t>(cells, 0));
+    cur.value.assign(static_cast<std::size_t>(channels) * cells, 0);
     cur.allowed.assign(cells, 0);
     const int half = 1 << (h - 1);
     for (int y = -pad_; y < height_; ++y) {
@@ -153,8 +154,8 @@ CorrelativeMap2D::CorrelativeMap2D(const std::vector<Vector2d>& map_points, cons
           if (xx >= width_ || yy >= height_) continue;
           const std::size_t j = index(xx, yy);
           for (int c = 0; c < channels; ++c) {
-            std::uint8_t& v = cur.value[static_cast<std::size_t>(c)][i];
-            v = std::max(v, prev.value[static_cast<std::size_t>(c)][j]);
+            std::uint8_t& v = cur.value[static_cast<std::size_t>(c) * cells + i];
+            v = std::max(v, prev.value[static_cast<std::size_t>(c) * cells + j]);
           }
           cur.allowed[i] = static_cast<std::uint8_t>(cur.allowed[i] | prev.allowed[j]);
         }
@@ -176,7 +177,8 @@ double CorrelativeMap2D::likelihood(const Vector2d& p, const Vector2d& normal) c
   const double fx = std::floor((p.x() - origin_.x()) / settings_.resolution);
   const double fy = std::floor((p.y() - origin_.y()) / settings_.resolution);
   if (fx < 0.0 || fy < 0.0 || fx >= width_ || fy >= height_) return 0.0;
-  return levels_[0].value[static_cast<std::size_t>(c)][index(static_cast<int>(fx), static_cast<int>(fy))] / 255.0;
+  return levels_[0].value[static_cast<std::size_t>(c) * cells_ + index(static_cast<int>(fx), static_cast<int>(fy))] /
+         255.0;
 }
 
 double CorrelativeMap2D::score(const std::vector<Vector2d>& scan, const Pose2& pose,
@@ -196,7 +198,7 @@ double CorrelativeMap2D::score(const std::vector<Vector2d>& scan, const Pose2& p
 double CorrelativeMap2D::see_through(const std::vector<Vector2d>& scan, const Pose2& pose, const Vector2d& sensor,
                                      double margin) const {
   PLUMB_CHECK(std::isfinite(margin) && margin >= 0.0, "CorrelativeMap2D::see_through: margin = " << margin << " must be >= 0");
-  const std::vector<std::uint8_t>& any = levels_[0].value[static_cast<std::size_t>(bins_)];
+  const std::uint8_t* any = &levels_[0].value[static_cast<std::size_t>(bins_) * cells_];
   const double r = settings_.resolution;
   const Vector2d s = pose * sensor;
   std::size_t counted = 0, through = 0;
@@ -300,6 +302,28 @@ CorrelativeResult CorrelativeMap2D::match(const std::vector<Vector2d>& scan_in, 
       o[2] = channel_of(phi[i] + angles[a]);
     }
   }
+  // Per angle, the bounding box of the offsets, and each point's channel and cell offset as one
+  // step in a level's flat array (index() is linear in x and y): a window whose points all land
+  // inside the grid is scored with one load per point and no bounds check, the common case.
+  struct Extent {
+    int x0, y0, x1, y1;
+  };
+  std::vector<Extent> extents(angles.size());
+  std::vector<std::ptrdiff_t> steps(angles.size() * n);
+  for (std::size_t a = 0; a < angles.size(); ++a) {
+    Extent e{std::numeric_limits<int>::max(), std::numeric_limits<int>::max(), std::numeric_limits<int>::min(),
+             std::numeric_limits<int>::min()};
+    for (std::size_t i = 0; i < n; ++i) {
+      const int* o = &offsets[(a * n + i) * 3];
+      e.x0 = std::min(e.x0, o[0]);
+      e.y0 = std::min(e.y0, o[1]);
+      e.x1 = std::max(e.x1, o[0]);
+      e.y1 = std::max(e.y1, o[1]);
+      steps[a * n + i] = static_cast<std::ptrdiff_t>(o[2]) * static_cast<std::ptrdiff_t>(cells_) +
+                         static_cast<std::ptrdiff_t>(o[1]) * stride_ + o[0];
+    }
+    extents[a] = e;
+  }
 
   // Translation range: the grid, cut to the region.
   int jx0 = 0, jy0 = 0, jx1 = width_ - 1, jy1 = height_ - 1;
@@ -321,12 +345,19 @@ CorrelativeResult CorrelativeMap2D::match(const std::vector<Vector2d>& scan_in, 
   std::size_t scored = 0;
   auto bound = [&](int a, int jx, int jy, int h) {
     ++scored;
-    const std::vector<std::vector<std::uint8_t>>& v = levels_[static_cast<std::size_t>(h)].value;
-    const int* o = &offsets[static_cast<std::size_t>(a) * n * 3];
+    const std::uint8_t* v = levels_[static_cast<std::size_t>(h)].value.data();
     long sum = 0;
+    const Extent& e = extents[static_cast<std::size_t>(a)];
+    if (inside(e.x0 + jx, e.y0 + jy) && inside(e.x1 + jx, e.y1 + jy)) {
+      const std::uint8_t* at = v + index(jx, jy);
+      const std::ptrdiff_t* cell_step = &steps[static_cast<std::size_t>(a) * n];
+      for (std::size_t i = 0; i < n; ++i) sum += at[cell_step[i]];
+      return sum;
+    }
+    const int* o = &offsets[static_cast<std::size_t>(a) * n * 3];
     for (std::size_t i = 0; i < n; ++i) {
       const int x = o[3 * i] + jx, y = o[3 * i + 1] + jy;
-      if (inside(x, y)) sum += v[static_cast<std::size_t>(o[3 * i + 2])][index(x, y)];
+      if (inside(x, y)) sum += v[static_cast<std::size_t>(o[3 * i + 2]) * cells_ + index(x, y)];
     }
     return sum;
   };

@@ -131,8 +131,9 @@ class CorrelativeMap2D {
  private:
   struct Level {
     /// Per channel (orientation sector 0..bins-1, then "any direction"): max likelihood (0..255)
-    /// over the window at each start.
-    std::vector<std::vector<std::uint8_t>> value;
+    /// over the window at each start; channel c's cells are value[c * cells_ + index(x, y)], one
+    /// array so that a scan point's channel and cell are one precomputed step.
+    std::vector<std::uint8_t> value;
     std::vector<std::uint8_t> allowed;  ///< 1 when the window holds an allowed translation
   };
   /// Channel of a scan point whose normal (map frame) has angle `phi`; NaN = the any channel.
@@ -145,6 +146,7 @@ class CorrelativeMap2D {
   CorrelativeMapSettings settings_;
   Vector2d origin_ = Vector2d::Zero();
   int width_ = 0, height_ = 0, pad_ = 0, stride_ = 0;
+  std::size_t cells_ = 0;  ///< cells per channel of a level (padding included)
   std::vector<Level> levels_;
   std::size_t num_allowed_ = 0;
   int bins_ = 0;  ///< orientation sectors in use (0 without map normals)
