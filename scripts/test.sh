@@ -2,7 +2,8 @@
 # SPDX-License-Identifier: BSD-3-Clause
 # README command 2 (and CI): install what is missing; release build with -Werror (library, CLI,
 # examples, benchmarks) and the find_package consumer; the demo's steps of README command 1 on that
-# build; every test built and run under ASan+UBSan; each fuzzer for PLUMB_FUZZ_SECONDS (30).
+# build; every test built and run under ASan+UBSan; each fuzzer for PLUMB_FUZZ_SECONDS (30), one
+# per core at a time.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root="$(pwd)"
@@ -54,7 +55,7 @@ cmake -S . -B build/asan "${launcher[@]}" -DCMAKE_BUILD_TYPE=None -DCMAKE_CXX_FL
 cmake --build build/asan -j"$jobs"
 
 if [ "$fuzz_seconds" -gt 0 ]; then
-  step "fuzzers, ${fuzz_seconds} s each"
+  step "fuzzers, ${fuzz_seconds} s each, ${jobs} at a time"
   cmake -S . -B build/fuzz "${launcher[@]}" -DCMAKE_BUILD_TYPE=None -DCMAKE_CXX_FLAGS="-O1" -DCMAKE_CXX_COMPILER=clang++ \
         -DPLUMB_BUILD_FUZZERS=ON -DPLUMB_BUILD_TESTS=OFF -DPLUMB_BUILD_BENCH=OFF \
         -DPLUMB_BUILD_EXAMPLES=OFF >/dev/null
@@ -65,16 +66,16 @@ if [ "$fuzz_seconds" -gt 0 ]; then
   for log in "$data_dir"/laser2d/carmen_corrected/*.log.gz; do
     gzip -dc "$log" | awk 'seen[$1]++ < 4' > "build/fuzz/seeds_carmen/$(basename "$log" .gz)"
   done
-  for fuzzer in build/fuzz/fuzz/plumb_*_fuzz; do
-    [ -x "$fuzzer" ] || continue
+  # One fuzzer per core at a time; each writes its own log, printed (tail) in name order after.
+  fuzz_one() {
+    local fuzzer="$1" name target corpus
     name="$(basename "$fuzzer")"
     target="${name#plumb_}"
     target="${target%_fuzz}"
     corpus="build/fuzz/corpus_$name"
     mkdir -p "$corpus"
-    seeds=()
+    local seeds=() options=()
     [ -d "fuzz/seeds/$target" ] && seeds+=("fuzz/seeds/$target")
-    options=()
     # Seeds read from the shared data. Where its files are large, inputs are capped at 16 KiB
     # (libFuzzer cuts longer seeds to that): a file's first lines cover the reader as well as all
     # of it, at a hundred times the executions per second.
@@ -84,10 +85,31 @@ if [ "$fuzz_seconds" -gt 0 ]; then
       calib_tuples) seeds+=("$data_dir/laser2d/calibration_censi"); options+=(-max_len=16384) ;;
       trajectory) seeds+=("$data_dir/trajectories/kitti00"); options+=(-max_len=16384) ;;
     esac
-    echo "-- $name"
+    local status=0
     "$fuzzer" -max_total_time="$fuzz_seconds" -rss_limit_mb=2048 -print_final_stats=1 ${options[@]+"${options[@]}"} \
-      "$corpus" ${seeds[@]+"${seeds[@]}"} 2>&1 | tail -n 12
+      "$corpus" ${seeds[@]+"${seeds[@]}"} > "build/fuzz/$name.log" 2>&1 || status=$?
+    echo "$status" > "build/fuzz/$name.status"
+  }
+  fuzzers=()
+  for fuzzer in build/fuzz/fuzz/plumb_*_fuzz; do [ -x "$fuzzer" ] && fuzzers+=("$fuzzer"); done
+  rm -f build/fuzz/*.status
+  for fuzzer in "${fuzzers[@]}"; do
+    while [ "$(jobs -rp | wc -l)" -ge "$jobs" ]; do wait -n || true; done
+    fuzz_one "$fuzzer" &
   done
+  wait
+  fuzz_failed=0
+  for fuzzer in "${fuzzers[@]}"; do
+    name="$(basename "$fuzzer")"
+    status="$(cat "build/fuzz/$name.status" 2>/dev/null || echo missing)"
+    echo "-- $name (exit $status)"
+    tail -n 12 "build/fuzz/$name.log"
+    [ "$status" = 0 ] || fuzz_failed=1
+  done
+  if [ "$fuzz_failed" -ne 0 ]; then
+    echo "test.sh: a fuzzer failed (its log is above and in build/fuzz/)" >&2
+    exit 1
+  fi
 fi
 
 step "tests (ASan + UBSan)"
