@@ -16,6 +16,7 @@
 
 #include "cli_support.hpp"
 #include "registry.hpp"
+#include "plumb/bim/floor_plan.hpp"
 #include "plumb/bim/mesh.hpp"
 #include "plumb/bim/sample.hpp"
 #include "plumb/core/error.hpp"
@@ -68,6 +69,9 @@ void run_ifcinfo(const IfcOptions& o) {
   }
   Vector3d lo, hi;
   m.bounds(lo, hi);
+  // The floor of every storey, as simulate and the localizer will find it (none without geometry).
+  std::vector<bim::StoreyFloor> floors;
+  if (m.num_triangles() > 0 && !m.storeys.empty()) floors = bim::storey_floors(m);
   std::vector<std::string> warnings = l.model.warnings;
   warnings.insert(warnings.end(), m.warnings.begin(), m.warnings.end());
   if (o.json) {
@@ -81,7 +85,14 @@ void run_ifcinfo(const IfcOptions& o) {
     for (const auto& [t, c] : counts) types[t] = {{"with_geometry", c.first}, {"without_geometry", c.second}};
     j["elements"] = types;
     nlohmann::json storeys = nlohmann::json::array();
-    for (const auto& s : m.storeys) storeys.push_back({{"name", s.name}, {"elevation", s.elevation}});
+    for (std::size_t i = 0; i < m.storeys.size(); ++i) {
+      nlohmann::json st = {{"name", m.storeys[i].name}, {"elevation", m.storeys[i].elevation}};
+      if (i < floors.size()) {
+        st["walkable_area"] = floors[i].free_area;
+        st["floor_source"] = bim::to_string(floors[i].source);
+      }
+      storeys.push_back(st);
+    }
     j["storeys"] = storeys;
     j["triangles"] = m.num_triangles();
     j["origin_offset"] = vec_json(m.origin_offset);
@@ -98,7 +109,12 @@ void run_ifcinfo(const IfcOptions& o) {
   std::printf("  %-28s %8s %8s\n", "type", "geometry", "none");
   for (const auto& [t, c] : counts) std::printf("  %-28s %8zu %8zu\n", t.c_str(), c.first, c.second);
   for (std::size_t i = 0; i < m.storeys.size(); ++i) {
-    std::printf("  storey %zu '%s' at %.3f m\n", i, m.storeys[i].name.c_str(), m.storeys[i].elevation);
+    std::printf("  storey %zu '%s' at %.3f m", i, m.storeys[i].name.c_str(), m.storeys[i].elevation);
+    if (i < floors.size()) {
+      std::printf(": %.1f m^2 walkable (%s)", floors[i].free_area,
+                  floors[i].source == bim::FloorSource::kWalls ? "enclosed by walls, no floor modelled" : "floor surfaces");
+    }
+    std::printf("\n");
   }
   std::printf("  %zu triangles", m.num_triangles());
   if (!m.vertices.empty()) {

@@ -23,6 +23,7 @@
 #include "run_output.hpp"
 #include "plumb/bim/ifc.hpp"
 #include "plumb/bim/mesh.hpp"
+#include "plumb/bim/sample.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/sim/lidar_model_json.hpp"
 #include "plumb/sim/scenario.hpp"
@@ -42,7 +43,7 @@ struct SimulateOptions {
   double clutter = 1.0;
   double as_built_sigma = 0.01;
   double as_built_deg = 0.2;
-  int storey = -1;
+  std::string storey;  // name or index; empty = the largest walkable storey
   int threads = 1;
   bool overwrite = false;
   bool compressed = false;
@@ -66,7 +67,6 @@ void run_simulate(const SimulateOptions& o) {
   s.seed = o.seed;
   s.loops = o.loops;
   s.length = o.length;
-  s.storey = o.storey;
   s.world.clutter = o.clutter;
   s.world.as_built_sigma_m = o.as_built_sigma;
   s.world.as_built_sigma_rad = o.as_built_deg * M_PI / 180.0;
@@ -88,6 +88,7 @@ void run_simulate(const SimulateOptions& o) {
   // Before the work: an unwritable or foreign output directory is found now.
   OutputDir out(o.output_dir, "simulate", frame_dump_names(), o.overwrite, false);
   const bim::BimMesh mesh = bim::build_mesh(bim::read_ifc(o.model_path));
+  s.storey = o.storey.empty() ? -1 : bim::find_storey(mesh, o.storey);
   const sim::ScenarioResult r = sim::simulate_scenario(mesh, out.staging(), s);
   out.commit();
   if (o.json) {
@@ -130,7 +131,8 @@ void register_simulate_command(CLI::App& app) {
   cmd->add_option("--length", opts->length,
                   "Stop after this many metres along the route, at most 10000 (default: all loops)")
       ->check(finite_number(0.0, 10000.0));
-  cmd->add_option("--storey", opts->storey, "Indoor storey index (default: largest free floor area)");
+  cmd->add_option("--storey", opts->storey,
+                  "Indoor storey, by name or index (default: the largest storey with modelled floors)");
   cmd->add_option("--clutter", opts->clutter,
                   "Furniture density factor, 0 = none, at most 10 (1: about one piece per 10 m^2; default 1)")
       ->check(finite_number(0.0, sim::WorldSettings::kMaxClutter));

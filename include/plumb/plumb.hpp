@@ -90,6 +90,7 @@
 
 #include "plumb/sim/imu_model.hpp"
 #include "plumb/sim/lidar.hpp"
+#include "plumb/sim/lidar_model_json.hpp"
 #include "plumb/sim/raycaster.hpp"
 #include "plumb/sim/robot.hpp"
 #include "plumb/sim/route.hpp"

@@ -131,6 +131,90 @@ void fill_cross_section(const OccupancyGrid& g, const BimMesh& mesh, const BimEl
   }
 }
 
+bool is_door(const BimMesh& mesh, std::int32_t element) {
+  if (element < 0 || static_cast<std::size_t>(element) >= mesh.elements.size()) return false;
+  const std::string& type = mesh.elements[static_cast<std::size_t>(element)].type;
+  return type == "IfcDoor" || type == "IfcDoorStandardCase";
+}
+
+/// Cells enclosed by the barriers (obstacles and doors): not reachable from the grid's border
+/// through barrier-free cells. Gaps narrower than `gap` between barriers are closed first (the
+/// barriers grown by gap / 2), and the outside then grows back by as much through cells free of
+/// obstacles, so the closing neither leaks in nor leaves a strip outside the exterior walls.
+std::vector<std::uint8_t> enclosed_cells(const OccupancyGrid& g, const std::vector<std::uint8_t>& occupied,
+                                         const std::vector<std::uint8_t>& door, double gap) {
+  const std::size_t n = occupied.size();
+  const int r = std::max(1, static_cast<int>(std::ceil(0.5 * gap / g.resolution)));
+  // Barriers grown by r cells (Chebyshev), separably: rows, then columns.
+  std::vector<std::uint8_t> rows(n, 0), grown(n, 0);
+  for (int iy = 0; iy < g.height; ++iy) {
+    int last = -1'000'000;  // x of the last barrier seen, left to right, then right to left
+    for (int ix = 0; ix < g.width; ++ix) {
+      const std::size_t i = g.index(ix, iy);
+      if (occupied[i] || door[i]) last = ix;
+      if (ix - last <= r) rows[i] = 1;
+    }
+    last = 1'000'000;
+    for (int ix = g.width - 1; ix >= 0; --ix) {
+      const std::size_t i = g.index(ix, iy);
+      if (occupied[i] || door[i]) last = ix;
+      if (last - ix <= r) rows[i] = 1;
+    }
+  }
+  for (int ix = 0; ix < g.width; ++ix) {
+    int last = -1'000'000;
+    for (int iy = 0; iy < g.height; ++iy) {
+      if (rows[g.index(ix, iy)]) last = iy;
+      if (iy - last <= r) grown[g.index(ix, iy)] = 1;
+    }
+    last = 1'000'000;
+    for (int iy = g.height - 1; iy >= 0; --iy) {
+      if (rows[g.index(ix, iy)]) last = iy;
+      if (last - iy <= r) grown[g.index(ix, iy)] = 1;
+    }
+  }
+  // Outside: flood from the border through cells off the grown barriers (4-connected), then r more
+  // steps through cells that are not obstacles.
+  std::vector<int> depth(n, -1);
+  std::vector<std::size_t> frontier, next;
+  for (int iy = 0; iy < g.height; ++iy) {
+    for (int ix = 0; ix < g.width; ++ix) {
+      if (ix != 0 && iy != 0 && ix != g.width - 1 && iy != g.height - 1) continue;
+      const std::size_t i = g.index(ix, iy);
+      if (!grown[i] && depth[i] < 0) {
+        depth[i] = 0;
+        frontier.push_back(i);
+      }
+    }
+  }
+  const int dx[4] = {1, -1, 0, 0}, dy[4] = {0, 0, 1, -1};
+  auto expand = [&](bool through_grown) {
+    next.clear();
+    for (std::size_t i : frontier) {
+      const int ix = static_cast<int>(i % static_cast<std::size_t>(g.width));
+      const int iy = static_cast<int>(i / static_cast<std::size_t>(g.width));
+      for (int k = 0; k < 4; ++k) {
+        if (!g.in_bounds(ix + dx[k], iy + dy[k])) continue;
+        const std::size_t j = g.index(ix + dx[k], iy + dy[k]);
+        if (depth[j] >= 0 || occupied[j] || (!through_grown && grown[j])) continue;
+        depth[j] = 0;
+        next.push_back(j);
+      }
+    }
+    frontier.swap(next);
+  };
+  std::vector<std::size_t> reached = frontier;
+  while (!frontier.empty()) {
+    expand(false);
+    reached.insert(reached.end(), frontier.begin(), frontier.end());
+  }
+  frontier = reached;
+  for (int step = 0; step < r && !frontier.empty(); ++step) expand(true);
+  std::vector<std::uint8_t> inside(n, 0);
+  for (std::size_t i = 0; i < n; ++i) inside[i] = depth[i] < 0 ? 1 : 0;
+  return inside;
+}
+
 OccupancyGrid slice_storey(const BimMesh& mesh, int storey, const OccupancyGridSettings& s) {
   Vector3d lo, hi;
   mesh.bounds(lo, hi);
@@ -150,14 +234,21 @@ OccupancyGrid slice_storey(const BimMesh& mesh, int storey, const OccupancyGridS
 
   const double floor_lo = g.floor_z - s.floor_below, floor_hi = g.floor_z + s.floor_above;
   const double slice_lo = g.floor_z + s.slice_min, slice_hi = g.floor_z + s.slice_max;
+  // Doors are open for the robot but close a room: the walls' enclosure (below) needs them.
+  std::vector<std::uint8_t> door(floor.size(), 0);
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     const std::int32_t element = t < mesh.triangle_element.size() ? mesh.triangle_element[t] : -1;
-    if (is_ignored(mesh, element, s.ignored_types)) continue;
     const auto& tri = mesh.triangles[t];
     const Vector3d& a = mesh.vertices[tri[0]];
     const Vector3d& b = mesh.vertices[tri[1]];
     const Vector3d& c = mesh.vertices[tri[2]];
     const double zmin = std::min({a.z(), b.z(), c.z()}), zmax = std::max({a.z(), b.z(), c.z()});
+    if (is_ignored(mesh, element, s.ignored_types)) {
+      if (is_door(mesh, element) && zmax >= slice_lo && zmin <= slice_hi) {
+        rasterize_triangle(g, a.head<2>(), b.head<2>(), c.head<2>(), true, [&](std::size_t i) { door[i] = 1; });
+      }
+      continue;
+    }
     // Floor: a (near) horizontal triangle within the floor band.
     const Vector3d n = (b - a).cross(c - a);
     const double nn = n.norm();
@@ -190,7 +281,20 @@ OccupancyGrid slice_storey(const BimMesh& mesh, int storey, const OccupancyGridS
   for (std::size_t i = 0; i < floor.size(); ++i) {
     g.cells[i] = occupied[i] ? CellState::kOccupied : (floor[i] ? CellState::kFree : CellState::kOutside);
   }
-  return g;
+  g.floor_source = FloorSource::kSurfaces;
+  g.has_doors = std::find(door.begin(), door.end(), 1) != door.end();
+  if (s.enclosure_gap <= 0.0) return g;
+  // Floor surfaces missing under much of what the walls enclose (a ground slab kept in the
+  // structural model, floors not modelled): the floor is what the walls, windows and doors enclose.
+  const std::vector<std::uint8_t> inside = enclosed_cells(g, occupied, door, s.enclosure_gap);
+  OccupancyGrid walls = g;
+  walls.floor_source = FloorSource::kWalls;
+  for (std::size_t i = 0; i < floor.size(); ++i) {
+    walls.cells[i] = occupied[i] ? CellState::kOccupied : (inside[i] ? CellState::kFree : CellState::kOutside);
+  }
+  const double surface_area = g.free_area(), walls_area = walls.free_area();
+  const bool surfaces_enough = surface_area >= s.min_walkable_area && surface_area >= s.min_surface_fraction * walls_area;
+  return !surfaces_enough && walls_area > surface_area ? walls : g;
 }
 
 void check_settings(const BimMesh& mesh, const OccupancyGridSettings& s) {
@@ -214,6 +318,16 @@ std::vector<double> storey_free_areas(const BimMesh& mesh, const OccupancyGridSe
   return areas;
 }
 
+std::vector<StoreyFloor> storey_floors(const BimMesh& mesh, const OccupancyGridSettings& settings) {
+  check_settings(mesh, settings);
+  std::vector<StoreyFloor> floors;
+  for (std::size_t k = 0; k < mesh.storeys.size(); ++k) {
+    const OccupancyGrid g = slice_storey(mesh, static_cast<int>(k), settings);
+    floors.push_back({g.free_area(), g.floor_source});
+  }
+  return floors;
+}
+
 OccupancyGrid floor_plan(const BimMesh& mesh, const OccupancyGridSettings& settings) {
   check_settings(mesh, settings);
   const int num_storeys = static_cast<int>(mesh.storeys.size());
@@ -225,15 +339,26 @@ OccupancyGrid floor_plan(const BimMesh& mesh, const OccupancyGridSettings& setti
     PLUMB_CHECK(g.free_area() >= settings.min_walkable_area,
                 "floor_plan: storey " << settings.storey << " '" << st.name << "' (elevation " << st.elevation
                                       << " m) is not walkable: " << g.free_area() << " m^2 of free floor < "
-                                      << settings.min_walkable_area << " m^2");
+                                      << settings.min_walkable_area
+                                      << " m^2 (neither floor surfaces near its elevation nor rooms closed by walls"
+                                         " and doors in the slice " << settings.slice_min << "-" << settings.slice_max
+                                      << " m above it)");
     return g;
   }
+  // The largest walkable storey, preferring floors that are modelled, then enclosures with doors
+  // (a foundation's walls enclose as much as the floor above, but no robot drives there).
   OccupancyGrid best;
   double best_area = -1.0;
+  int best_rank = -1;
   for (int k = 0; k < num_storeys; ++k) {
     OccupancyGrid g = slice_storey(mesh, k, settings);
     const double area = g.free_area();
-    if (area > best_area) {
+    const int rank = area < settings.min_walkable_area ? 0
+                     : g.floor_source == FloorSource::kSurfaces ? 3
+                     : g.has_doors ? 2
+                                   : 1;
+    if (rank > best_rank || (rank == best_rank && area > best_area)) {
+      best_rank = rank;
       best_area = area;
       best = std::move(g);
     }
@@ -241,7 +366,7 @@ OccupancyGrid floor_plan(const BimMesh& mesh, const OccupancyGridSettings& setti
   PLUMB_CHECK(best_area >= settings.min_walkable_area,
               "floor_plan: no walkable storey in the model: the largest free floor area of its "
                   << num_storeys << " storeys is " << best_area << " m^2 < " << settings.min_walkable_area
-                  << " m^2 (no floor slab near a storey elevation, or every floor is blocked)");
+                  << " m^2 (no floor surface near a storey elevation and no room enclosed by walls, or every floor is blocked)");
   return best;
 }
 

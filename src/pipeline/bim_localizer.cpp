@@ -160,6 +160,7 @@ BimLocalizer::BimLocalizer(const bim::BimMesh& mesh, const PointCloud& bim_cloud
     }
     m.index = k;
     m.floor_z = grid->floor_z;
+    m.floor_modelled = grid->floor_source == bim::FloorSource::kSurfaces;
     // Search every free floor cell, also those farther than the map margin from any wall (a
     // terrace, a hall): the map's translations cover the free floor's box.
     CorrelativeMapSettings map_settings = settings_.map;
@@ -284,15 +285,32 @@ BimLocalization BimLocalizer::localize(const PointCloud& frame, const Eigen::Iso
   const bool close_scores = second_map && second >= (1.0 - settings_.ambiguity_margin) * best;
 
   const auto t1 = std::chrono::steady_clock::now();
-  out.fine = refine_localization(frame, fine_, out.T_bim_base_search * T_base_lidar, settings_.fine);
+  // Where the model holds no floor, the floor the frame sees cannot be matched: refine without it.
+  PointCloud without_floor;
+  auto frame_for = [&](const StoreyMap* m) -> const PointCloud& {
+    if (m->floor_modelled) return frame;
+    if (without_floor.empty()) {
+      std::vector<std::size_t> keep;
+      for (std::size_t i = 0; i < frame.size(); ++i) {
+        if ((T * frame.points[i]).z() >= settings_.unmodelled_floor_height) keep.push_back(i);
+      }
+      without_floor = frame.select(keep);
+    }
+    return without_floor;
+  };
+  const PointCloud& best_frame = frame_for(best_map);
+  out.fine = refine_localization(best_frame, fine_, out.T_bim_base_search * T_base_lidar, settings_.fine);
+  const PointCloud* result_frame = &best_frame;
   if (close_scores) {
     // Two places explain the floor-plan slice about equally: let the whole 3D frame decide.
-    IcpResult other = refine_localization(frame, fine_, out.T_bim_base_second * T_base_lidar, settings_.fine);
+    const PointCloud& second_frame = frame_for(second_map);
+    IcpResult other = refine_localization(second_frame, fine_, out.T_bim_base_second * T_base_lidar, settings_.fine);
     if (other.overlap > out.fine.overlap) {
       std::swap(out.fine, other);
       std::swap(out.T_bim_base_search, out.T_bim_base_second);
       std::swap(out.score, out.second_score);
       out.storey = second_map->index;
+      result_frame = &second_frame;
     }
     out.second_overlap = other.overlap;
     out.ambiguous = out.fine.overlap - other.overlap < settings_.ambiguity_overlap_margin ||
@@ -314,7 +332,7 @@ BimLocalization BimLocalizer::localize(const PointCloud& frame, const Eigen::Iso
       for (const double side : {1.0, -1.0}) {
         Eigen::Isometry3d T_start = out.T_bim_base_search;
         T_start.translation().head<2>() += side * settings_.retry_shift * weak;
-        IcpResult retry = refine_localization(frame, fine_, T_start * T_base_lidar, settings_.fine);
+        IcpResult retry = refine_localization(*result_frame, fine_, T_start * T_base_lidar, settings_.fine);
         ++out.refine_starts;
         const Eigen::Isometry3d T_base = retry.T_target_source * T_base_lidar.inverse();
         const double moved = (T_base.translation() - out.T_bim_base_search.translation()).norm();

@@ -339,6 +339,10 @@ Route plan_auto_route(const OccupancyGrid& g, const RouteSettings& s) {
     }
   }
   route.length = polyline_length(route.points, true);
+  PLUMB_CHECK(route.length >= s.min_length,
+              "plan_auto_route: the largest drivable region (cells with clearance " << s.min_clearance
+                  << " m) gives a route of only " << route.length << " m < " << s.min_length
+                  << " m: the free floor is too small or too narrow for the robot");
   return route;
 }
 

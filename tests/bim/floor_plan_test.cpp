@@ -8,6 +8,7 @@
 #include "plumb/bim/ifc.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/sim/route.hpp"
+#include "model_variants.hpp"
 #include "test_data.hpp"
 
 namespace plumb::bim {
@@ -101,10 +102,51 @@ TEST(FloorPlanTest, DoorsAreOpenOnlyWhenIgnored) {
   EXPECT_TRUE(sim::plan_path(closed, sim::clearance_map(closed), {3, 2}, {9, 6}, rs).empty());
 }
 
+// Without any floor surface (as in exports whose slab is in the structural model), the floor is
+// what the walls and doors enclose: the same free cells as with the slab, give or take the cells
+// along the outer walls' faces.
+TEST(FloorPlanTest, WithoutAFloorTheWallsEncloseIt) {
+  const OccupancyGrid slab = floor_plan(three_rooms(true));
+  const OccupancyGrid walls = floor_plan(three_rooms(false));
+  EXPECT_EQ(slab.floor_source, FloorSource::kSurfaces);
+  EXPECT_EQ(walls.floor_source, FloorSource::kWalls);
+  EXPECT_TRUE(walls.has_doors);
+  ASSERT_EQ(walls.cells.size(), slab.cells.size());
+  std::size_t both = 0, either = 0;
+  for (std::size_t i = 0; i < slab.cells.size(); ++i) {
+    const bool a = slab.cells[i] == CellState::kFree, b = walls.cells[i] == CellState::kFree;
+    both += a && b ? 1 : 0;
+    either += a || b ? 1 : 0;
+  }
+  EXPECT_GT(static_cast<double>(both) / static_cast<double>(either), 0.97);
+  EXPECT_TRUE(walls.is_free({6.0, 3.5}));   // the doorways stay open for the robot
+  EXPECT_FALSE(walls.is_free({-0.5, 4.0}));  // outside
+  EXPECT_FALSE(walls.is_free({2.5, 5.5}));   // under the table
+
+  // A gap wider than enclosure_gap in an outer wall (here 1 m, no door in it) lets the outside in.
+  BimMesh open = three_rooms(false);
+  open.triangles.clear();
+  open.triangle_element.clear();
+  open.elements.clear();
+  open.vertices.clear();
+  add_box(open, {0, 0, 0}, {5, 0.2, 2.8}, "IfcWallStandardCase");
+  add_box(open, {6, 0, 0}, {12, 0.2, 2.8}, "IfcWallStandardCase");
+  add_box(open, {0, 7.8, 0}, {12, 8, 2.8}, "IfcWallStandardCase");
+  add_box(open, {0, 0, 0}, {0.2, 8, 2.8}, "IfcWallStandardCase");
+  add_box(open, {11.8, 0, 0}, {12, 8, 2.8}, "IfcWallStandardCase");
+  EXPECT_THROW(floor_plan(open), Error);
+  OccupancyGridSettings wide;
+  wide.enclosure_gap = 1.2;
+  EXPECT_EQ(floor_plan(open, wide).floor_source, FloorSource::kWalls);
+  EXPECT_NEAR(floor_plan(open, wide).free_area(), 11.6 * 7.6, 0.1 * 2 * (11.6 + 7.6));
+}
+
 TEST(FloorPlanTest, NoWalkableStoreyIsAClearError) {
+  OccupancyGridSettings no_enclosure;
+  no_enclosure.enclosure_gap = 0.0;
   const BimMesh no_floor = three_rooms(false);
   try {
-    floor_plan(no_floor);
+    floor_plan(no_floor, no_enclosure);
     FAIL() << "expected plumb::Error";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("no walkable storey"), std::string::npos) << e.what();
@@ -165,6 +207,79 @@ TEST(FloorPlanTest, FzkHausFreeSpaceLiesInsideItsSpaces) {
   }
   EXPECT_GT(g.free_area(), 30.0);
   EXPECT_GT(static_cast<double>(in_space), 0.9 * static_cast<double>(free)) << in_space << " of " << free;
+}
+
+}  // namespace
+}  // namespace plumb::bim
+
+namespace plumb::bim {
+namespace {
+
+double free_iou(const OccupancyGrid& a, const OccupancyGrid& b) {
+  std::size_t both = 0, either = 0;
+  for (std::size_t i = 0; i < a.cells.size() && i < b.cells.size(); ++i) {
+    const bool fa = a.cells[i] == CellState::kFree, fb = b.cells[i] == CellState::kFree;
+    both += fa && fb ? 1 : 0;
+    either += fa || fb ? 1 : 0;
+  }
+  return either > 0 ? static_cast<double>(both) / static_cast<double>(either) : 0.0;
+}
+
+// The shared models with their slabs and coverings taken out, as exports that leave the floors to
+// the structural model: the storey a robot drives is found from its walls and doors, and its free
+// cells are those of the model's own floor (independent reference: the slab that was taken out).
+TEST(FloorPlanTest, SharedModelsWithoutFloorsAreWalkableFromTheirWalls) {
+  struct Case {
+    const char* file;
+    int storey;         // the storey the full model drives on
+    double min_iou;
+  };
+  for (const Case& c : {Case{"ifc/buildings/AC20-FZK-Haus.ifc", 0, 0.95}, Case{"ifc/buildings/duplex.ifc", 1, 0.55}}) {
+    PLUMB_REQUIRE_DATA(path, c.file);
+    const BimMesh mesh = build_mesh(read_ifc(path));
+    const BimMesh bare = test::without_types(mesh, {"IfcSlab", "IfcCovering", "IfcRoof"});
+    OccupancyGridSettings s;
+    const OccupancyGrid full = floor_plan(mesh, s);
+    ASSERT_EQ(full.storey, c.storey) << c.file;
+    EXPECT_EQ(full.floor_source, FloorSource::kSurfaces) << c.file;
+    const OccupancyGrid walls = floor_plan(bare, s);  // storey chosen as for a user: -1
+    EXPECT_EQ(walls.storey, c.storey) << c.file << ": a storey with doors, not the foundation";
+    EXPECT_EQ(walls.floor_source, FloorSource::kWalls) << c.file;
+    EXPECT_GT(free_iou(full, walls), c.min_iou) << c.file;
+    // Every free cell from the walls lies on the model's own floor or within 0.3 m of it.
+    std::size_t off_floor = 0, free_cells = 0;
+    for (int iy = 0; iy < walls.height; ++iy) {
+      for (int ix = 0; ix < walls.width; ++ix) {
+        if (walls.at(ix, iy) != CellState::kFree) continue;
+        ++free_cells;
+        bool near = false;
+        for (int d = -6; d <= 6 && !near; ++d) {
+          for (int e = -6; e <= 6 && !near; ++e) near = full.at(ix + d, iy + e) != CellState::kOutside;
+        }
+        off_floor += near ? 0 : 1;
+      }
+    }
+    EXPECT_LT(static_cast<double>(off_floor), 0.01 * static_cast<double>(free_cells)) << c.file;
+  }
+}
+
+TEST(FloorPlanTest, ModelledFloorsAreKeptOnEverySharedModel) {
+  for (const char* file : {"ifc/buildings/AC20-FZK-Haus.ifc", "ifc/buildings/duplex.ifc",
+                           "ifc/buildings/IfcOpenHouse_IFC4.ifc"}) {
+    PLUMB_REQUIRE_DATA(path, file);
+    const BimMesh mesh = build_mesh(read_ifc(path));
+    const std::vector<double> areas = storey_free_areas(mesh);
+    for (std::size_t k = 0; k < areas.size(); ++k) {
+      if (areas[k] < 4.0) continue;
+      OccupancyGridSettings s;
+      s.storey = static_cast<int>(k);
+      OccupancyGridSettings surfaces_only = s;
+      surfaces_only.enclosure_gap = 0.0;
+      const OccupancyGrid g = floor_plan(mesh, s);
+      if (g.floor_source == FloorSource::kWalls) continue;  // a storey whose floor is not modelled
+      EXPECT_EQ(g.cells, floor_plan(mesh, surfaces_only).cells) << file << " storey " << k;
+    }
+  }
 }
 
 }  // namespace

@@ -24,6 +24,7 @@
 #include "plumb/pipeline/run.hpp"
 #include "plumb/sim/lidar.hpp"
 #include "plumb/sim/scenario.hpp"
+#include "model_variants.hpp"
 #include "test_data.hpp"
 
 namespace {
@@ -159,6 +160,21 @@ INSTANTIATE_TEST_SUITE_P(Buildings, BimLocalizerBuildingTest,
                            std::replace(n.begin(), n.end(), '-', '_');
                            return n;
                          });
+
+// Real architectural exports often leave the floors to the structural model. The building still
+// has them (the frames see a floor), but the model does not: the walkable floor comes from the
+// walls, and the starts are found as in the full model, never in a wrong place.
+TEST(BimLocalizerTest, AModelWithoutFloorsLocalizesTheStartsOfTheFullBuilding) {
+  PLUMB_REQUIRE_DATA(path, "ifc/buildings/AC20-FZK-Haus.ifc");
+  const Building& b = building("AC20-FZK-Haus");
+  const plumb::bim::BimMesh bare = plumb::test::without_types(*b.mesh, {"IfcSlab", "IfcCovering"});
+  const BimLocalizer localizer(bare, plumb::sample_bim_cloud(bare, 0.05));
+  const Tally t = localize_all("AC20-FZK-Haus without floors", b, localizer, 0.0, 0.0);
+  EXPECT_GE(t.found, 17);
+  if (t.found > 0) {
+    EXPECT_LT(t.errors[t.errors.size() / 2], 0.02);
+  }
+}
 
 // The seed localizes its first frame to < 2 mm. In the simulated buildings above, the model itself
 // is off by 1 cm / 0.2 deg per element, which bounds the error against the truth (medians of

@@ -9,9 +9,11 @@
 
 #include <gtest/gtest.h>
 
+#include "plumb/bim/floor_plan.hpp"
 #include "plumb/bim/ifc.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/io/frame_dump.hpp"
+#include "model_variants.hpp"
 #include "test_data.hpp"
 
 namespace plumb::sim {
@@ -165,6 +167,47 @@ TEST(ScenarioTest, SiteDrivesAroundTheBuildingOnOpenGround) {
   const PointCloud c = simulate_sweep(*plan.world, lidar, [&](double) { return T; }, plan.frame_stamps[0], rng);
   const auto ground = std::count(c.labels.begin(), c.labels.end(), kSimGround);
   EXPECT_GT(static_cast<double>(ground), 0.3 * static_cast<double>(c.size()));
+}
+
+// FZK-Haus as an architectural export without its slabs and coverings (the floors left to the
+// structural model): the route is planned on the floor its walls enclose and stays on the floor
+// of the full model (the independent reference), and the world the LiDAR sees has no floor.
+TEST(ScenarioTest, IndoorRouteInAModelWithoutFloorsStaysOnTheRealFloor) {
+  PLUMB_REQUIRE_DATA(path, "ifc/buildings/AC20-FZK-Haus.ifc");
+  const bim::BimMesh bare = test::without_types(fzk_haus(), {"IfcSlab", "IfcCovering"});
+  const ScenarioPlan plan = plan_scenario(bare, small_indoor(0.0));
+  EXPECT_EQ(plan.grid.floor_source, bim::FloorSource::kWalls);
+  EXPECT_EQ(plan.storey, 0);
+  EXPECT_GT(plan.route.length, 15.0);
+  EXPECT_GE(plan.route.waypoints.size(), 3u);
+  const bim::OccupancyGrid real = bim::floor_plan(fzk_haus());
+  for (std::size_t k = 0; k < plan.trajectory.states.size(); k += 10) {
+    const RobotState& st = plan.trajectory.states[k];
+    ASSERT_TRUE(real.is_free({st.pose.x, st.pose.y})) << "t = " << st.t;
+  }
+}
+
+// A route that cannot be made is an error naming why, not a route of 0 m.
+TEST(ScenarioTest, ARouteTooShortIsAnError) {
+  bim::OccupancyGrid g;
+  g.resolution = 0.05;
+  g.width = 40;
+  g.height = 40;
+  g.cells.assign(1600, bim::CellState::kOutside);
+  for (int iy = 13; iy < 27; ++iy) {
+    for (int ix = 13; ix < 27; ++ix) g.cells[g.index(ix, iy)] = bim::CellState::kFree;  // 0.7 m square
+  }
+  RouteSettings rs;
+  rs.min_clearance = 0.2;
+  rs.min_waypoint_clearance = 0.2;
+  try {
+    plan_auto_route(g, rs);
+    FAIL() << "expected plumb::Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("too small or too narrow"), std::string::npos) << e.what();
+  }
+  rs.min_length = 0.0;
+  EXPECT_NO_THROW(plan_auto_route(g, rs));
 }
 
 TEST(ScenarioTest, ModelWithoutWalkableStoreyIsAClearError) {

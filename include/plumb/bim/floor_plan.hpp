@@ -21,6 +21,15 @@ enum class CellState : std::uint8_t {
   kOccupied = 2,  ///< some element crosses the slice above the cell
 };
 
+/// @brief Where a floor plan's free floor came from.
+enum class FloorSource : std::uint8_t {
+  kSurfaces = 0,  ///< horizontal faces near the storey elevation (slabs, floor coverings, ...)
+  kWalls = 1,     ///< the region enclosed by the storey's walls and doors (no floor surface modelled)
+};
+
+/// @brief Stable lower-case name: "surfaces" or "walls".
+inline const char* to_string(FloorSource s) { return s == FloorSource::kWalls ? "walls" : "surfaces"; }
+
 /// @brief A 2D occupancy grid in the mesh frame's x-y plane; cell (ix, iy) covers
 ///        [origin + (ix, iy) * resolution, origin + (ix + 1, iy + 1) * resolution).
 struct OccupancyGrid {
@@ -31,6 +40,8 @@ struct OccupancyGrid {
   std::vector<CellState> cells;        ///< row-major: index iy * width + ix
   int storey = -1;                     ///< BimMesh::storeys index, -1 when not from a storey
   double floor_z = 0.0;                ///< floor height of the storey, mesh frame [m]
+  FloorSource floor_source = FloorSource::kSurfaces;  ///< where the free cells' floor came from
+  bool has_doors = false;              ///< a door crosses the obstacle slice
 
   bool in_bounds(int ix, int iy) const { return ix >= 0 && iy >= 0 && ix < width && iy < height; }
   std::size_t index(int ix, int iy) const {
@@ -58,6 +69,12 @@ struct OccupancyGridSettings {
   double floor_above = 0.25;  ///< ... to elevation + floor_above [m]
   double margin = 1.0;        ///< grid margin around the model's x-y bounds [m]
   double min_walkable_area = 4.0;  ///< a storey with less free floor is not walkable [m^2]
+  /// A storey whose floor surfaces cover less than min_walkable_area or less than
+  /// min_surface_fraction of what its walls, windows and doors enclose in the obstacle slice (real
+  /// architectural exports often keep the ground slab in the structural model) takes that
+  /// enclosure as its floor, gaps narrower than enclosure_gap closed [m]; 0 disables it.
+  double enclosure_gap = 0.3;
+  double min_surface_fraction = 0.5;
   /// IFC types that do not block the robot: doors are open, spaces and openings are not matter.
   std::vector<std::string> ignored_types = {"IfcDoor", "IfcSpace", "IfcOpeningElement",
                                             "IfcOpeningStandardCase", "IfcAnnotation", "IfcSite"};
@@ -66,6 +83,10 @@ struct OccupancyGridSettings {
 /// @brief Floor-plan slice of one storey: cells with a floor surface near the storey elevation
 ///        (upward or downward facing horizontal triangles) that no element crosses between
 ///        slice_min and slice_max above it are free; cells crossed are occupied; the rest outside.
+///        Where the floor surfaces are missing (see enclosure_gap), the cells enclosed by the
+///        storey's walls and doors are the floor instead (OccupancyGrid::floor_source = kWalls).
+///        With storey = -1, the largest storey with modelled floors is taken, else the largest
+///        enclosure with doors, else the largest enclosure.
 /// @param mesh building mesh (openings already cut by build_mesh()).
 /// @throws plumb::Error when the mesh has no storey, the requested storey does not exist or is not
 ///         walkable, or (storey = -1) no storey has min_walkable_area of free floor.
@@ -74,5 +95,14 @@ OccupancyGrid floor_plan(const BimMesh& mesh, const OccupancyGridSettings& setti
 
 /// @brief Free floor area of every storey [m^2] (same slicing as floor_plan()), in storey order.
 std::vector<double> storey_free_areas(const BimMesh& mesh, const OccupancyGridSettings& settings = {});
+
+/// @brief One storey's floor as floor_plan() finds it.
+struct StoreyFloor {
+  double free_area = 0.0;                            ///< [m^2]
+  FloorSource source = FloorSource::kSurfaces;       ///< where it came from
+};
+
+/// @brief The floor of every storey (same slicing as floor_plan()), in storey order.
+std::vector<StoreyFloor> storey_floors(const BimMesh& mesh, const OccupancyGridSettings& settings = {});
 
 }  // namespace plumb::bim

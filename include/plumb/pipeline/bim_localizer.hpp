@@ -90,6 +90,10 @@ struct BimLocalizerSettings {
   /// Fine stage (refine_localization): BIM cloud and frame at fine_voxel_size, point-to-plane ICP.
   LocalizeSettings fine = default_localizer_fine();
   double max_refine_shift = 0.5;   ///< gate: ICP moving the base farther than this from the 2D pose [m]
+  /// On a storey whose floor the model does not hold (its floor plan comes from the walls,
+  /// bim::FloorSource::kWalls), the frame's points lower than this above the base (the floor it
+  /// sees) are left out of the 3D refinement and its overlap: the model cannot explain them [m].
+  double unmodelled_floor_height = 0.15;
   /// Before a hinted weak match (score in [min_score_hinted, min_score)) is rejected because its 3D
   /// overlap is below min_overlap_hinted, the refinement is run again from the 2D pose shifted by
   /// +-retry_shift along the direction the frame's walls (height band) constrain least; the start
@@ -157,6 +161,7 @@ class BimLocalizer {
   struct StoreyMap {
     int index = -1;
     double floor_z = 0.0;
+    bool floor_modelled = true;  ///< false: the floor plan came from the walls (no floor surfaces)
     std::unique_ptr<CorrelativeMap2D> map;
     /// Walls that are solid over the whole height band (no door or window in the column): what a
     /// ray at any height cannot pass, for the see-through gate.

@@ -25,6 +25,7 @@ struct RouteSettings {
   int max_waypoints = 8;              ///< places (room centres) visited per loop
   double min_waypoint_clearance = 0.6;     ///< a waypoint has at least this clearance [m]
   double min_waypoint_separation = 2.5;    ///< waypoints are at least this far apart [m]
+  double min_length = 1.0;            ///< a shorter closed route is an error, not a route [m]
 };
 
 /// @brief A closed route: the robot starts at points[0] and returns there after the last point.
