@@ -36,4 +36,19 @@ inline bim::BimMesh without_types(const bim::BimMesh& mesh, const std::vector<st
   return out;
 }
 
+/// `mesh` without the slabs and floor coverings whose top lies at storey `storey`'s floor (within
+/// -0.6 .. +0.25 m of its elevation): an export whose ground slab is in the structural model. The
+/// slabs above (the ceilings) stay.
+inline bim::BimMesh without_floor_slabs(const bim::BimMesh& mesh, int storey) {
+  const double z = mesh.storeys.at(static_cast<std::size_t>(storey)).elevation;
+  bim::BimMesh marked = mesh;
+  for (bim::BimElement& e : marked.elements) {
+    const bool floor_type = e.type == "IfcSlab" || e.type == "IfcSlabStandardCase" || e.type == "IfcCovering";
+    if (floor_type && e.bbox_max.z() >= z - 0.6 && e.bbox_max.z() <= z + 0.25) e.type = "(removed floor)";
+  }
+  bim::BimMesh out = without_types(marked, {"(removed floor)"});
+  for (std::size_t k = 0; k < out.elements.size(); ++k) out.elements[k].type = mesh.elements[k].type;
+  return out;
+}
+
 }  // namespace plumb::test
