@@ -50,15 +50,19 @@ struct ExtractionSummary {
 std::vector<CalibrationTuple> tuples_from_logs(const CalibrateOptions& o, ExtractionSummary& summary) {
   const io::CarmenLog log = io::read_carmen(o.log_path);
   PLUMB_CHECK(!log.lasers.empty(), o.log_path << ": no laser scan (FLASER, RAWLASER or ROBOTLASER1)");
-  // As `plumb scan2d`: a scan whose stamp does not increase is dropped with a warning naming its
-  // line, rather than refusing the whole log; wheel readings are interpolated at the kept stamps.
-  const std::vector<std::size_t> kept = indices_with_increasing_stamps(
+  // As `plumb scan2d`: a scan whose stamp goes back is dropped with a warning naming its line, and
+  // scans sharing a stamp are spread, rather than refusing the whole log; wheel readings are
+  // interpolated at the resulting stamps.
+  const io::StampOrder order = records_in_time_order(
       o.log_path, log.lasers.size(), [&](std::size_t k) { return log.lasers[k].scan.stamp; },
       [&](std::size_t k) { return log.lasers[k].line; }, "scan");
   std::vector<LaserScan> scans;
-  scans.reserve(kept.size());
-  for (std::size_t k : kept) scans.push_back(log.lasers[k].scan);
-  summary.dropped_scans = log.lasers.size() - kept.size();
+  scans.reserve(order.kept.size());
+  for (std::size_t j = 0; j < order.kept.size(); ++j) {
+    scans.push_back(log.lasers[order.kept[j]].scan);
+    scans.back().stamp = order.stamps[j];
+  }
+  summary.dropped_scans = order.dropped.size();
   io::WheelEncoderReadSettings wheel_settings;
   wheel_settings.ticks_per_revolution = o.ticks_per_revolution;
   const std::vector<WheelEncoderReading> wheels = io::read_wheel_encoders(o.wheels_path, wheel_settings);
@@ -154,7 +158,7 @@ void run_calibrate(const CalibrateOptions& o) {
   }
   auto sd = [&r](int i) { return std::sqrt(r.covariance(i, i)); };
   if (from_logs) {
-    std::printf("%zu scans (%zu dropped, stamp not increasing), %zu pairs: %zu tuples; skipped %zu without wheel "
+    std::printf("%zu scans (%zu dropped, stamp going back), %zu pairs: %zu tuples; skipped %zu without wheel "
                 "readings, %zu with changing wheel speeds, %zu refused by the scan matcher\n",
                 summary.scans, summary.dropped_scans, summary.pairs, summary.tuples, summary.without_odometry,
                 summary.speed_changes, summary.match_failures);
@@ -183,8 +187,9 @@ void register_calibrate_command(CLI::App& app) {
   cmd->add_option("TUPLES", options->tuples_path,
                   "Tuple file: JSON lines {\"T\", \"phi_l\", \"phi_r\", \"sm\": [x, y, theta]}");
   cmd->footer(
-      "With --log, a scan whose stamp does not increase over the previous one is dropped, with a\n"
-      "warning on stderr naming LOG:LINE, and counted in extraction.dropped_scans of --json.");
+      "With --log, a scan whose stamp goes back in time is dropped, with a warning on stderr naming\n"
+      "LOG:LINE, and counted in extraction.dropped_scans of --json; scans sharing a stamp are kept,\n"
+      "their stamps spread evenly to the next one.");
   cmd->add_option("--log", options->log_path,
                   "Instead of TUPLES: CARMEN laser log (FLASER / RAWLASER / ROBOTLASER1, plain or .gz); "
                   "tuples are made by PLICP between scans --spacing apart");

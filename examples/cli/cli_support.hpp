@@ -19,6 +19,7 @@
 #include <CLI/CLI.hpp>
 
 #include "plumb/core/error.hpp"
+#include "plumb/io/stamps.hpp"
 
 namespace plumb::cli {
 
@@ -112,37 +113,40 @@ inline CLI::Validator non_negative_number(double hi = std::numeric_limits<double
 
 namespace plumb::cli {
 
-/// Which of `count` records to keep so that their stamps strictly increase: a record whose stamp
-/// is not greater than the last kept one is dropped, with a warning on stderr naming `path:line`
-/// (the first few individually, then a count). Laser logs do carry such stamps (a clock stepped
-/// back while logging); dropping the few scans keeps the rest usable, where refusing the whole
-/// log would not, and the output stays ordered in time.
+/// The records of a log in message order with stamps that strictly increase (io::order_stamps):
+/// a record whose stamp goes back in time is dropped, with a warning on stderr naming `path:line`
+/// (the first few individually, then a count); runs of records sharing one stamp (a quantised
+/// clock) are kept, their stamps spread evenly to the next one, with one warning. Laser logs do
+/// carry both (a clock stepped back while logging, a logger writing coarse stamps); repairing them
+/// keeps the log usable, where refusing it or dropping every tied record would not.
 template <typename StampOf, typename LineOf>
-std::vector<std::size_t> indices_with_increasing_stamps(const std::string& path, std::size_t count,
-                                                        StampOf stamp_of, LineOf line_of, const char* what) {
+io::StampOrder records_in_time_order(const std::string& path, std::size_t count, StampOf stamp_of,
+                                     LineOf line_of, const char* what) {
   constexpr std::size_t kMaxWarnings = 5;
-  std::vector<std::size_t> kept;
-  kept.reserve(count);
-  std::size_t dropped = 0;
-  for (std::size_t k = 0; k < count; ++k) {
-    if (kept.empty() || stamp_of(k) > stamp_of(kept.back())) {
-      kept.push_back(k);
-      continue;
-    }
-    if (++dropped <= kMaxWarnings) {
-      std::ostringstream os;
-      os.precision(15);
-      os << "plumb: warning: " << path << ':' << line_of(k) << ": " << what << " stamp " << stamp_of(k)
-         << " does not increase over " << stamp_of(kept.back()) << " (line " << line_of(kept.back())
-         << "); " << what << " dropped\n";
-      std::cerr << os.str();
-    }
+  std::vector<double> stamps(count);
+  for (std::size_t k = 0; k < count; ++k) stamps[k] = stamp_of(k);
+  io::StampOrder order = io::order_stamps(stamps);
+  std::size_t shown = 0, kept_before = 0;
+  for (std::size_t k : order.dropped) {
+    if (++shown > kMaxWarnings) break;
+    while (kept_before < order.kept.size() && order.kept[kept_before] < k) ++kept_before;
+    const std::size_t last = order.kept[kept_before - 1];  // the first record is always kept
+    std::ostringstream os;
+    os.precision(15);
+    os << "plumb: warning: " << path << ':' << line_of(k) << ": " << what << " stamp " << stamp_of(k)
+       << " goes back before " << stamp_of(last) << " (line " << line_of(last) << "); " << what << " dropped\n";
+    std::cerr << os.str();
   }
-  if (dropped > kMaxWarnings) {
-    std::cerr << "plumb: warning: " << path << ": " << dropped << ' ' << what
-              << "s dropped in all because their stamps did not increase\n";
+  if (order.dropped.size() > kMaxWarnings) {
+    std::cerr << "plumb: warning: " << path << ": " << order.dropped.size() << ' ' << what
+              << "s dropped in all because their stamps went back in time\n";
   }
-  return kept;
+  if (order.respread > 0) {
+    std::cerr << "plumb: warning: " << path << ": " << order.respread << " of " << count << ' ' << what
+              << "s share their stamp with the one before (a quantised clock?): kept in message order, their"
+                 " stamps spread evenly up to the next one\n";
+  }
+  return order;
 }
 
 }  // namespace plumb::cli

@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // `plumb scan2d LOG -o TRAJ.tum [--json]`: scan-matching odometry (PLICP with the raw wheel-odometry
 // prior) over the FLASER scans of a CARMEN log; one TUM pose per FLASER scan, in log order.
-// A scan whose stamp does not increase over the previous kept one is dropped with a warning naming
-// the log's line (see indices_with_increasing_stamps), so the TUM file never goes back in time.
+// A scan whose stamp goes back in time is dropped with a warning naming the log's line; scans that
+// share a stamp (a quantised clock) are kept in message order with their stamps spread (see
+// records_in_time_order), so the TUM file always goes forward in time.
 // Exit code 3 (kExitJobFailed) when every scan after the first fell back to wheel odometry: the
 // file is written, but it holds no scan matching at all.
 
@@ -47,14 +48,16 @@ void run_scan2d(const Scan2dOptions& o) {
     if (log.lasers[k].kind == io::CarmenLaserKind::kFlaser) flasers.push_back(k);
   }
   PLUMB_CHECK(!flasers.empty(), o.log_path << ": no FLASER message");
-  const std::vector<std::size_t> kept = indices_with_increasing_stamps(
+  const io::StampOrder order = records_in_time_order(
       o.log_path, flasers.size(), [&](std::size_t i) { return log.lasers[flasers[i]].scan.stamp; },
       [&](std::size_t i) { return log.lasers[flasers[i]].line; }, "scan");
-  for (std::size_t i : kept) {
+  for (std::size_t j = 0; j < order.kept.size(); ++j) {
+    const std::size_t i = order.kept[j];
     scans.push_back(log.lasers[flasers[i]].scan);
-    odometry.push_back(prior[flasers[i]]);
+    scans.back().stamp = order.stamps[j];
+    odometry.push_back(prior[flasers[i]]);  // by message order where the stamps do not bracket the scan
   }
-  const std::size_t dropped = flasers.size() - kept.size();
+  const std::size_t dropped = order.dropped.size();
   ScanOdometrySettings settings;
   settings.local_map_size = o.local_map_size;
   if (o.laser_pose.size() == 3) {
@@ -75,13 +78,14 @@ void run_scan2d(const Scan2dOptions& o) {
                         {"fallbacks", r.num_fallbacks},
                         {"failures", r.num_fallbacks},
                         {"dropped_scans", dropped},
+                        {"respread_stamps", order.respread},
                         {"mean_iterations", r.mean_iterations},
                         {"ms_per_match", r.mean_match_ms},
                         {"output", o.output_path}};
     std::cout << j.dump(2) << '\n';
   } else {
-    std::printf("%zu scans: %zu matched (%zu degenerate), %zu fallbacks to odometry, %zu dropped (stamp not "
-                "increasing); %.1f iterations, %.3f ms per match -> %s\n",
+    std::printf("%zu scans: %zu matched (%zu degenerate), %zu fallbacks to odometry, %zu dropped (stamp going "
+                "back); %.1f iterations, %.3f ms per match -> %s\n",
                 scans.size(), r.num_matched, r.num_degenerate, r.num_fallbacks, dropped, r.mean_iterations,
                 r.mean_match_ms, o.output_path.c_str());
   }
@@ -98,8 +102,9 @@ void register_scan2d_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "scan2d", "Scan-matching odometry (PLICP + wheel-odometry prior) over a CARMEN log's FLASER scans");
   cmd->footer(
-      "A FLASER scan whose stamp does not increase over the previous one is dropped, with a warning\n"
-      "on stderr naming LOG:LINE, and counted as dropped_scans in --json.\n"
+      "A FLASER scan whose stamp goes back in time is dropped, with a warning on stderr naming\n"
+      "LOG:LINE, and counted as dropped_scans in --json; scans sharing a stamp (a quantised clock)\n"
+      "are kept in log order, their stamps spread to the next one (respread_stamps in --json).\n"
       "Exit codes: 0 ok; 1 unusable input (message names it); 3 the trajectory was written but every\n"
       "scan after the first fell back to wheel odometry (no scan matched); >= 100 usage errors.");
   cmd->add_option("log", opts->log_path, "CARMEN log (plain or .gz)")->required()->check(CLI::ExistingFile);

@@ -48,6 +48,7 @@
 #include "plumb/io/input_file.hpp"
 #include "plumb/io/kitti_bin.hpp"
 #include "plumb/io/pcd.hpp"
+#include "plumb/io/stamps.hpp"
 #include "plumb/io/ply.hpp"
 #include "plumb/io/trajectory.hpp"
 #include "plumb/io/svg.hpp"

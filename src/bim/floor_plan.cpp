@@ -293,7 +293,8 @@ OccupancyGrid slice_storey(const BimMesh& mesh, int storey, const OccupancyGridS
     walls.cells[i] = occupied[i] ? CellState::kOccupied : (inside[i] ? CellState::kFree : CellState::kOutside);
   }
   const double surface_area = g.free_area(), walls_area = walls.free_area();
-  const bool surfaces_enough = surface_area >= s.min_walkable_area && surface_area >= s.min_surface_fraction * walls_area;
+  const bool surfaces_enough =
+      surface_area >= s.min_walkable_area && surface_area >= s.min_surface_fraction * walls_area;
   return !surfaces_enough && walls_area > surface_area ? walls : g;
 }
 
@@ -366,7 +367,8 @@ OccupancyGrid floor_plan(const BimMesh& mesh, const OccupancyGridSettings& setti
   PLUMB_CHECK(best_area >= settings.min_walkable_area,
               "floor_plan: no walkable storey in the model: the largest free floor area of its "
                   << num_storeys << " storeys is " << best_area << " m^2 < " << settings.min_walkable_area
-                  << " m^2 (no floor surface near a storey elevation and no room enclosed by walls, or every floor is blocked)");
+                  << " m^2 (no floor surface near a storey elevation and no room enclosed by walls, or every"
+                     " floor is blocked)");
   return best;
 }
 
