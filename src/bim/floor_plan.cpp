@@ -80,10 +80,16 @@ std::vector<Vector3d> clip_z(const std::vector<Vector3d>& poly, double z, double
   return out;
 }
 
+/// The IFC type of a mesh element; empty for a triangle that belongs to none.
+const std::string& type_of(const BimMesh& mesh, std::int32_t element) {
+  static const std::string none;
+  if (element < 0 || static_cast<std::size_t>(element) >= mesh.elements.size()) return none;
+  return mesh.elements[static_cast<std::size_t>(element)].type;
+}
+
 bool is_ignored(const BimMesh& mesh, std::int32_t element, const std::vector<std::string>& ignored) {
-  if (element < 0 || static_cast<std::size_t>(element) >= mesh.elements.size()) return false;
-  const std::string& type = mesh.elements[static_cast<std::size_t>(element)].type;
-  return std::find(ignored.begin(), ignored.end(), type) != ignored.end();
+  const std::string& type = type_of(mesh, element);
+  return !type.empty() && std::find(ignored.begin(), ignored.end(), type) != ignored.end();
 }
 
 /// Marks the cells whose centre lies inside the closed surface of one element at height z
@@ -132,8 +138,7 @@ void fill_cross_section(const OccupancyGrid& g, const BimMesh& mesh, const BimEl
 }
 
 bool is_door(const BimMesh& mesh, std::int32_t element) {
-  if (element < 0 || static_cast<std::size_t>(element) >= mesh.elements.size()) return false;
-  const std::string& type = mesh.elements[static_cast<std::size_t>(element)].type;
+  const std::string& type = type_of(mesh, element);
   return type == "IfcDoor" || type == "IfcDoorStandardCase";
 }
 
@@ -311,11 +316,8 @@ void check_settings(const BimMesh& mesh, const OccupancyGridSettings& s) {
 }  // namespace
 
 std::vector<double> storey_free_areas(const BimMesh& mesh, const OccupancyGridSettings& settings) {
-  check_settings(mesh, settings);
   std::vector<double> areas;
-  for (std::size_t k = 0; k < mesh.storeys.size(); ++k) {
-    areas.push_back(slice_storey(mesh, static_cast<int>(k), settings).free_area());
-  }
+  for (const StoreyFloor& f : storey_floors(mesh, settings)) areas.push_back(f.free_area);
   return areas;
 }
 
