@@ -14,24 +14,42 @@ namespace plumb {
 
 namespace {
 
+/// Whether consecutive chain points a, b (seen from `origin`) lie on one surface: closer than
+/// `max_gap`, or, at grazing incidence far away, closer than `grazing_factor` times the spacing
+/// the beams' angle would give at normal incidence (|a - origin| * angle between the beams).
+bool linked(const Vector2d& a, const Vector2d& b, const Vector2d* origin, double max_gap, double grazing_factor) {
+  const double gap_sq = (a - b).squaredNorm();
+  if (gap_sq < max_gap * max_gap) return true;
+  if (origin == nullptr || !(grazing_factor > 0.0)) return false;
+  const Vector2d ra = a - *origin, rb = b - *origin;
+  const double r = std::min(ra.norm(), rb.norm());
+  const double angle = std::atan2(std::abs(ra.x() * rb.y() - ra.y() * rb.x()), ra.dot(rb));
+  const double allowed = grazing_factor * r * angle;
+  return gap_sq < allowed * allowed;
+}
+
+/// link[k] != 0 when points k - 1 and k are neighbours on one surface (link[0] = 0).
+std::vector<char> chain_links(const std::vector<Vector2d>& pts, const Vector2d* origin, double max_gap,
+                              double grazing_factor) {
+  std::vector<char> link(pts.size(), 0);
+  for (std::size_t k = 1; k < pts.size(); ++k) link[k] = linked(pts[k - 1], pts[k], origin, max_gap, grazing_factor) ? 1 : 0;
+  return link;
+}
+
 /// Unit normals of an ordered point chain: the chord between the nearest chain points at least
-/// `baseline` away on either side (walking while consecutive points are closer than max_gap), so
+/// `baseline` away on either side (walking along linked points), so
 /// that range noise on densely sampled scans does not randomise them; zero where none exists.
 /// The walk steps one point at a time for 16 points, then by 1/16 of the way walked: on scans of
 /// very many beams (a CARMEN log may carry 10^6) the cost per point stays logarithmic in the
 /// number of points within the baseline instead of linear, and the chord at most ~6 % longer.
-std::vector<Vector2d> chain_normals(const std::vector<Vector2d>& pts, double max_gap, double baseline) {
+std::vector<Vector2d> chain_normals(const std::vector<Vector2d>& pts, const std::vector<char>& link, double baseline) {
   const std::size_t n = pts.size();
   std::vector<Vector2d> normals(n, Vector2d::Zero());
-  const double max_sq = max_gap * max_gap, base_sq = baseline * baseline;
-  // first[i] / last[i]: the ends of the run of points linked by gaps below max_gap around i.
+  const double base_sq = baseline * baseline;
+  // first[i] / last[i]: the ends of the run of linked points around i.
   std::vector<std::size_t> first(n), last(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    first[i] = i > 0 && (pts[i - 1] - pts[i]).squaredNorm() < max_sq ? first[i - 1] : i;
-  }
-  for (std::size_t i = n; i-- > 0;) {
-    last[i] = i + 1 < n && (pts[i + 1] - pts[i]).squaredNorm() < max_sq ? last[i + 1] : i;
-  }
+  for (std::size_t i = 0; i < n; ++i) first[i] = i > 0 && link[i] ? first[i - 1] : i;
+  for (std::size_t i = n; i-- > 0;) last[i] = i + 1 < n && link[i + 1] ? last[i + 1] : i;
   constexpr std::size_t kUnitSteps = 16;
   for (std::size_t i = 0; i < n; ++i) {
     std::size_t lo = i, hi = i;
@@ -56,7 +74,8 @@ std::vector<Vector2d> chain_normals(const std::vector<Vector2d>& pts, double max
 
 PlicpReference::PlicpReference(const LaserScan& scan, const PlicpReferenceSettings& settings) {
   scan.check_consistent("PlicpReference");
-  add_chain(scan.to_points(), settings);
+  const Vector2d origin = Vector2d::Zero();
+  add_chain(scan.to_points(), &origin, settings);
   build();
 }
 
@@ -70,27 +89,28 @@ PlicpReference::PlicpReference(const std::vector<const LaserScan*>& scans,
     scans[k]->check_consistent("PlicpReference");
     std::vector<Vector2d> chain = scans[k]->to_points();
     for (auto& p : chain) p = T_ref_scans[k] * p;
-    add_chain(chain, settings);
+    const Vector2d origin(T_ref_scans[k].x, T_ref_scans[k].y);
+    add_chain(chain, &origin, settings);
   }
   build();
 }
 
 PlicpReference::PlicpReference(const std::vector<std::vector<Vector2d>>& chains,
                                const PlicpReferenceSettings& settings) {
-  for (const auto& chain : chains) add_chain(chain, settings);
+  for (const auto& chain : chains) add_chain(chain, nullptr, settings);
   build();
 }
 
-void PlicpReference::add_chain(const std::vector<Vector2d>& chain,
+void PlicpReference::add_chain(const std::vector<Vector2d>& chain, const Vector2d* origin,
                                const PlicpReferenceSettings& settings) {
   std::vector<Vector2d> pts;
   pts.reserve(chain.size());
   for (const Vector2d& p : chain) {
     if (p.allFinite()) pts.push_back(p);
   }
-  const double max_sq = settings.max_neighbor_distance * settings.max_neighbor_distance;
-  const std::vector<Vector2d> normals =
-      chain_normals(pts, settings.max_neighbor_distance, settings.normal_baseline);
+  normal_baseline_ = settings.normal_baseline;
+  const std::vector<char> link = chain_links(pts, origin, settings.max_neighbor_distance, settings.grazing_factor);
+  const std::vector<Vector2d> normals = chain_normals(pts, link, settings.normal_baseline);
   const int first = static_cast<int>(points_.size());
   for (std::size_t k = 0; k < pts.size(); ++k) {
     const int i = first + static_cast<int>(k);
@@ -98,7 +118,7 @@ void PlicpReference::add_chain(const std::vector<Vector2d>& chain,
     normals_.push_back(normals[k]);
     prev_.push_back(-1);
     next_.push_back(-1);
-    if (k > 0 && (pts[k - 1] - pts[k]).squaredNorm() < max_sq) {
+    if (link[k]) {
       prev_.back() = i - 1;
       next_[static_cast<std::size_t>(i - 1)] = i;
     }
@@ -279,7 +299,10 @@ void find_pairs(const std::vector<Vector2d>& points, const std::vector<Vector2d>
     const Vector2d seg = ref.point(static_cast<std::size_t>(j2)) - q1;
     const double len = seg.norm();
     if (!(len > 1e-9)) continue;
-    const Vector2d n(-seg.y() / len, seg.x() / len);
+    // The line through j1: the chord to j2, or, where that chord is shorter than the normal
+    // baseline (dense beams, whose range noise would turn a short chord), j1's smoothed normal.
+    Vector2d n(-seg.y() / len, seg.x() / len);
+    if (len < ref.normal_baseline() && ref.normal(j1).squaredNorm() > 0.0) n = ref.normal(j1);
     if (min_cos > -1.0 && normals[i].squaredNorm() > 0.0 && ref.normal(j1).squaredNorm() > 0.0) {
       const Vector2d& m = normals[i];
       const Vector2d mw(c * m.x() - sn * m.y(), sn * m.x() + c * m.y());
@@ -334,7 +357,10 @@ PlicpResult plicp(const std::vector<Vector2d>& current_points, const PlicpRefere
     return result;
   }
 
-  const std::vector<Vector2d> normals = chain_normals(points, settings.max_neighbor_distance, settings.normal_baseline);
+  const Vector2d origin = Vector2d::Zero();
+  const std::vector<Vector2d> normals = chain_normals(
+      points, chain_links(points, &origin, settings.max_neighbor_distance, settings.grazing_factor),
+      settings.normal_baseline);
   std::vector<Candidate> cands;
   std::vector<PointToLinePair> pairs;
   cands.reserve(points.size());

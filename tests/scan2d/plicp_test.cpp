@@ -167,6 +167,77 @@ TEST(PlicpTest, DensestLegalScanIsMatchedAsASparseOne) {
   EXPECT_NEAR(wrap_angle(r.T_ref_cur.theta - truth.theta), 0.0, 0.002);
 }
 
+// A wall far away seen at grazing incidence with 1 deg beams: its points lie farther apart than
+// max_neighbor_distance, but within grazing_factor x range x beam angle, so they stay one surface
+// (a corridor's walls keep their segments); a jump in depth between two walls is still a break.
+TEST(PlicpTest, GrazingWallsStayLinkedDepthJumpsDoNot) {
+  // A wall along y = 8 m from x = 0 to 60 m, and a near wall (y = 4 m) ending at x = 4 m in front of it.
+  const std::vector<test::Segment> world = {{{0.0, 8.0}, {60.0, 8.0}}, {{-2.0, 4.0}, {4.0, 4.0}}};
+  const LaserScan scan = test::cast_scan(world, Pose2{}, 181, kPi, 80.0);
+  const std::vector<Vector2d> pts = scan.to_points();
+  PlicpReferenceSettings off;
+  off.grazing_factor = 0.0;
+  const PlicpReference linked(scan), unlinked(scan, off);
+  ASSERT_EQ(linked.size(), pts.size());
+  int grazing = 0, gained = 0, jumps = 0;
+  for (std::size_t i = 0; i + 1 < pts.size(); ++i) {
+    const double gap = (pts[i + 1] - pts[i]).norm();
+    const bool same_wall = std::abs(pts[i].y() - pts[i + 1].y()) < 0.05;
+    if (!same_wall) {
+      ++jumps;
+      EXPECT_EQ(linked.next(i), -1) << "beam " << i << ": a depth jump of " << gap << " m";
+      continue;
+    }
+    if (gap < 0.5) {
+      EXPECT_EQ(linked.next(i), static_cast<int>(i) + 1);
+      continue;
+    }
+    ++grazing;
+    EXPECT_EQ(unlinked.next(i), -1);
+    // Linked exactly when the gap is within 3x the spacing of beams 1 deg apart at that range.
+    const double allowed = 3.0 * std::min(pts[i].norm(), pts[i + 1].norm()) * (kPi / 180.0);
+    if (gap < 0.99 * allowed) {
+      ++gained;
+      EXPECT_EQ(linked.next(i), static_cast<int>(i) + 1) << "beam " << i;
+    } else if (gap > 1.01 * allowed) {
+      EXPECT_EQ(linked.next(i), -1) << "beam " << i;
+    }
+  }
+  EXPECT_GE(jumps, 1);
+  EXPECT_GE(grazing, 5);
+  EXPECT_GE(gained, 3);
+}
+
+// Dense beams with range noise: the chord between neighbouring reference points is shorter than
+// the noise can bend, so the line through a matched point is its smoothed normal's; the match is
+// as good as on the same scan without noise within the noise's reach.
+TEST(PlicpTest, DenseNoisyScansMatchThroughSmoothedNormals) {
+  const auto world = test::room_world();
+  const Pose2 a{0.0, 0.0, 0.2}, b{0.15, 0.05, 0.24};
+  const Pose2 truth = a.ominus().oplus(b);
+  double err_xy = 0.0, err_th = 0.0, chord_xy = 0.0;
+  Rng rng(17);
+  const int trials = 4;
+  for (int t = 0; t < trials; ++t) {
+    const LaserScan ref = test::cast_scan(world, a, 2881, kPi, 30.0, 0.01, &rng);  // 1/16 deg
+    const LaserScan cur = test::cast_scan(world, b, 2881, kPi, 30.0, 0.01, &rng);
+    const PlicpResult r = plicp(cur, ref, truth.oplus(Pose2{0.05, -0.04, 0.02}));
+    ASSERT_EQ(r.status, Status::kOk);
+    err_xy += std::hypot(r.T_ref_cur.x - truth.x, r.T_ref_cur.y - truth.y) / trials;
+    err_th += std::abs(wrap_angle(r.T_ref_cur.theta - truth.theta)) / trials;
+    // The same match with lines from the raw chords (a baseline so short no chord is below it).
+    PlicpReferenceSettings raw;
+    raw.normal_baseline = 1e-6;
+    PlicpSettings raw_cur;
+    raw_cur.normal_baseline = 1e-6;
+    const PlicpResult c = plicp(cur, PlicpReference(ref, raw), truth.oplus(Pose2{0.05, -0.04, 0.02}), raw_cur);
+    chord_xy += std::hypot(c.T_ref_cur.x - truth.x, c.T_ref_cur.y - truth.y) / trials;
+  }
+  EXPECT_LT(err_xy, 0.003);
+  EXPECT_LT(err_th, 0.001);
+  EXPECT_LT(err_xy, chord_xy);
+}
+
 TEST(PlicpTest, RecoversKnownTransformWithRangeNoise) {
   const auto world = test::room_world();
   for (const Pose2& o : {Pose2{0.1, -0.1, 0.05}, Pose2{-0.1, 0.1, -0.08}}) {

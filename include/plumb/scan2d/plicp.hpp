@@ -34,10 +34,16 @@ struct PlicpReferenceSettings {
   /// Two consecutive valid beams of a scan are neighbours on one surface (so may form a
   /// correspondence segment) only when their points are closer than this [m].
   double max_neighbor_distance = 0.5;
-  /// A current point's normal is the chord to the nearest neighbours at least this far away on
+  /// Farther apart, they are still neighbours when closer than this many times the spacing their
+  /// beams would have on a surface facing the laser (range x angle between the beams): a wall seen
+  /// at grazing incidence far away (a corridor's, with 1 deg beams) keeps its segments. 0 = off.
+  double grazing_factor = 3.0;
+  /// A point's smoothed normal is the chord to the nearest neighbours at least this far away on
   /// each side, which averages out range noise on dense scans [m]. Past the 16th neighbour the
   /// walk to them takes strides of 1/16 of the way walked, so the chord may reach ~6 % beyond
-  /// the baseline and the cost grows with the log, not the number, of beams within it.
+  /// the baseline and the cost grows with the log, not the number, of beams within it. A match's
+  /// line through a reference point is the chord to its nearer neighbour, or this smoothed normal
+  /// where that chord is shorter than the baseline.
   double normal_baseline = 0.05;
 };
 
@@ -75,16 +81,20 @@ class PlicpReference {
   int next(std::size_t i) const { return next_[i]; }
   /// @brief Smoothed unit normal of point i (zero when its chain is too short to define one).
   const Vector2d& normal(std::size_t i) const { return normals_[i]; }
+  /// @brief The chord length below which a point's smoothed normal defines its line [m]
+  ///        (PlicpReferenceSettings::normal_baseline).
+  double normal_baseline() const { return normal_baseline_; }
   /// @brief The kd-tree over the points (null when empty).
   const KdTree2f* tree() const { return tree_.empty() ? nullptr : &tree_.front(); }
 
  private:
-  void add_chain(const std::vector<Vector2d>& chain, const PlicpReferenceSettings& settings);
+  void add_chain(const std::vector<Vector2d>& chain, const Vector2d* origin, const PlicpReferenceSettings& settings);
   void build();
 
   std::vector<Vector2d> points_;
   std::vector<int> prev_, next_;
   std::vector<Vector2d> normals_;
+  double normal_baseline_ = PlicpReferenceSettings{}.normal_baseline;
   std::vector<KdTree2f> tree_;  ///< zero or one tree (KdTree has no empty state)
 };
 
@@ -97,8 +107,11 @@ struct PlicpSettings {
   /// A pair is dropped when the current point's normal (from its scan neighbours) and the
   /// reference segment's normal differ by more than this [rad]; >= pi disables the check.
   double max_normal_angle = 0.6;
-  /// Current-scan neighbours farther apart than this do not define a normal [m].
+  /// Current-scan neighbours farther apart than this do not define a normal [m] ...
   double max_neighbor_distance = 0.5;
+  /// ... unless closer than this many times range x angle between their beams (see
+  /// PlicpReferenceSettings::grazing_factor). 0 = off.
+  double grazing_factor = 3.0;
   /// A current point's normal is the chord to the nearest neighbours at least this far away on
   /// each side, which averages out range noise on dense scans [m]. Past the 16th neighbour the
   /// walk to them takes strides of 1/16 of the way walked, so the chord may reach ~6 % beyond
