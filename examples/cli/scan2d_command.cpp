@@ -75,6 +75,7 @@ void run_scan2d(const Scan2dOptions& o) {
     nlohmann::json j = {{"scans", scans.size()},
                         {"matched", r.num_matched},
                         {"degenerate", r.num_degenerate},
+                        {"prior_free", r.num_prior_free},
                         {"fallbacks", r.num_fallbacks},
                         {"failures", r.num_fallbacks},
                         {"dropped_scans", dropped},
@@ -84,9 +85,9 @@ void run_scan2d(const Scan2dOptions& o) {
                         {"output", o.output_path}};
     std::cout << j.dump(2) << '\n';
   } else {
-    std::printf("%zu scans: %zu matched (%zu degenerate), %zu fallbacks to odometry, %zu dropped (stamp going "
+    std::printf("%zu scans: %zu matched (%zu degenerate, %zu prior-free), %zu fallbacks to odometry, %zu dropped (stamp going "
                 "back); %.1f iterations, %.3f ms per match -> %s\n",
-                scans.size(), r.num_matched, r.num_degenerate, r.num_fallbacks, dropped, r.mean_iterations,
+                scans.size(), r.num_matched, r.num_degenerate, r.num_prior_free, r.num_fallbacks, dropped, r.mean_iterations,
                 r.mean_match_ms, o.output_path.c_str());
   }
   if (scans.size() > 1 && r.num_matched == 0) {

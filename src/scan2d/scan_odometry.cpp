@@ -3,6 +3,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include "plumb/core/error.hpp"
 
@@ -26,6 +27,14 @@ void ScanOdometry::add_keyframe(const LaserScan& scan, const Pose2& T_world_lase
   map_ = PlicpReference(scans, poses, settings_.reference);
 }
 
+bool ScanOdometry::passes_gate(const PlicpResult& m, const Pose2& start) const {
+  const Pose2 dev = start.ominus().oplus(m.T_ref_cur);
+  return (m.status == Status::kOk || m.status == Status::kNotConverged) &&
+         m.valid_fraction >= settings_.min_valid_fraction && std::sqrt(m.mse) <= settings_.max_rmse &&
+         std::hypot(dev.x, dev.y) <= settings_.max_prior_deviation_xy &&
+         std::abs(wrap_angle(dev.theta)) <= settings_.max_prior_deviation_theta;
+}
+
 ScanOdometryStep ScanOdometry::add(const LaserScan& scan, const Pose2& odom_pose) {
   PLUMB_CHECK(std::isfinite(odom_pose.x) && std::isfinite(odom_pose.y) && std::isfinite(odom_pose.theta),
               "ScanOdometry::add: odometry pose is not finite");
@@ -43,6 +52,7 @@ ScanOdometryStep ScanOdometry::add(const LaserScan& scan, const Pose2& odom_pose
   // Prediction from wheel odometry (Liu et al. 2022, sec. 3.3, loop steps (1)-(2)).
   const Pose2 odom_motion = last_odom_.ominus().oplus(odom_pose);
   last_odom_ = odom_pose;
+  const Pose2 T_world_base_prev = T_world_base_;
   const Pose2 T_world_laser_guess = T_world_base_.oplus(odom_motion).oplus(l);
   const Pose2& T_world_kf = keyframes_.back().T_world_laser;
   const Pose2 T_kf_cur_guess = T_world_kf.ominus().oplus(T_world_laser_guess);
@@ -52,12 +62,7 @@ ScanOdometryStep ScanOdometry::add(const LaserScan& scan, const Pose2& odom_pose
   step.match_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 
   const PlicpResult& m = step.match;
-  const Pose2 dev = T_kf_cur_guess.ominus().oplus(m.T_ref_cur);
-  const bool good = (m.status == Status::kOk || m.status == Status::kNotConverged) &&
-                    m.valid_fraction >= settings_.min_valid_fraction &&
-                    std::sqrt(m.mse) <= settings_.max_rmse &&
-                    std::hypot(dev.x, dev.y) <= settings_.max_prior_deviation_xy &&
-                    std::abs(wrap_angle(dev.theta)) <= settings_.max_prior_deviation_theta;
+  const bool good = passes_gate(m, T_kf_cur_guess);
   Pose2 T_kf_cur = T_kf_cur_guess;
   if (good) {
     T_kf_cur = m.T_ref_cur;
@@ -74,10 +79,30 @@ ScanOdometryStep ScanOdometry::add(const LaserScan& scan, const Pose2& odom_pose
     }
   } else {
     step.mode = ScanMatchMode::kFallback;
+    if (settings_.prior_free_retry) {
+      // Starts that do not use this step's odometry: the previous step repeated, and standing still.
+      const Pose2 T_kf_prev = T_world_kf.ominus().oplus(T_world_base_prev.oplus(l));
+      const Pose2 starts[2] = {T_kf_prev.oplus(laser_motion(last_motion_, l)), T_kf_prev};
+      double best_mse = std::numeric_limits<double>::infinity();
+      for (const Pose2& start : starts) {
+        const Pose2 d = T_kf_cur_guess.ominus().oplus(start);
+        if (std::hypot(d.x, d.y) < 1e-3 && std::abs(wrap_angle(d.theta)) < 1e-3) continue;  // the prior's own start
+        const auto t1 = std::chrono::steady_clock::now();
+        PlicpResult r = plicp(scan, map_, start, settings_.plicp);
+        step.match_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count();
+        if (passes_gate(r, start) && r.mse < best_mse) {
+          best_mse = r.mse;
+          T_kf_cur = r.T_ref_cur;
+          step.match = r;
+          step.mode = ScanMatchMode::kPriorFree;
+        }
+      }
+    }
   }
   const Pose2 T_world_laser = T_world_kf.oplus(T_kf_cur);
   T_world_base_ = T_world_laser.oplus(l.ominus());
   T_world_base_.theta = wrap_angle(T_world_base_.theta);
+  last_motion_ = T_world_base_prev.ominus().oplus(T_world_base_);
   step.T_world_base = T_world_base_;
 
   const Pose2 since_kf = T_world_kf.ominus().oplus(T_world_laser);
@@ -109,6 +134,7 @@ ScanOdometryResult run_scan_odometry(const std::vector<LaserScan>& scans,
     if (s.mode == ScanMatchMode::kFallback) ++r.num_fallbacks;
     else ++r.num_matched;
     if (s.mode == ScanMatchMode::kDegenerate) ++r.num_degenerate;
+    if (s.mode == ScanMatchMode::kPriorFree) ++r.num_prior_free;
   }
   if (attempts > 0) {
     r.mean_iterations = sum_it / static_cast<double>(attempts);

@@ -21,15 +21,17 @@ enum class ScanMatchMode {
   kInitial,   ///< first scan: the odometry pose
   kMatched,   ///< PLICP passed the quality gate
   kDegenerate,  ///< PLICP passed the gate but was degenerate: its weak direction taken from the prior
-  kFallback,  ///< PLICP failed the gate: odometry prior used
+  kPriorFree,  ///< the match from the prior failed the gate, one from a prior-free start passed it
+  kFallback,  ///< no match passed the gate: odometry prior used
 };
 
-/// @brief Stable lower-case name ("initial", "matched", "degenerate", "fallback").
+/// @brief Stable lower-case name ("initial", "matched", "degenerate", "prior_free", "fallback").
 inline const char* to_string(ScanMatchMode m) {
   switch (m) {
     case ScanMatchMode::kInitial: return "initial";
     case ScanMatchMode::kMatched: return "matched";
     case ScanMatchMode::kDegenerate: return "degenerate";
+    case ScanMatchMode::kPriorFree: return "prior_free";
     case ScanMatchMode::kFallback: return "fallback";
   }
   return "unknown";
@@ -52,6 +54,11 @@ struct ScanOdometrySettings {
   double max_prior_deviation_theta = 0.35;  ///< |match - prior| rotation [rad]
   /// When a match is degenerate, keep the prior's component along the weak direction.
   bool prior_along_degenerate_direction = true;
+  /// When the match from the prior fails the gate, match again from starts that do not use the
+  /// odometry (the last step repeated, and standing still), judged by the same gate around their
+  /// own start: a prior made wrong by wheel slip, a kidnap or stamps that do not bracket the scan
+  /// is not trusted over a scan that matches without it.
+  bool prior_free_retry = true;
 };
 
 /// @brief The outcome of one scan.
@@ -67,7 +74,9 @@ struct ScanOdometryStep {
 /// For each scan with its raw odometry pose: the odometry motion since the previous scan,
 /// moved into the laser frame through T_base_laser, predicts the laser pose; PLICP refines it
 /// against the local map (the last `local_map_size` keyframes expressed in the newest
-/// keyframe's frame); the quality gate accepts the match or falls back to the prediction.
+/// keyframe's frame); the quality gate accepts the match. When it does not, the scan is matched
+/// again from prior-free starts (the last step repeated, standing still) and the best of those
+/// passing the gate is taken; only when none does, the prediction is.
 /// @note Not thread-safe; one instance per sequence. Deterministic.
 class ScanOdometry {
  public:
@@ -89,9 +98,13 @@ class ScanOdometry {
   };
   void add_keyframe(const LaserScan& scan, const Pose2& T_world_laser);
 
+  /// The gate: the match is usable and within the deviation budget of its start.
+  bool passes_gate(const PlicpResult& m, const Pose2& start) const;
+
   ScanOdometrySettings settings_;
   bool started_ = false;
   Pose2 T_world_base_;
+  Pose2 last_motion_;  ///< robot motion of the previous step (identity at the start)
   Pose2 last_odom_;
   std::deque<Keyframe> keyframes_;
   PlicpReference map_;  ///< in the newest keyframe's laser frame
@@ -104,6 +117,7 @@ struct ScanOdometryResult {
   std::vector<int> iterations;         ///< PLICP rounds per scan (0 for the first)
   std::size_t num_matched = 0;         ///< kMatched + kDegenerate
   std::size_t num_degenerate = 0;
+  std::size_t num_prior_free = 0;     ///< kPriorFree (counted in num_matched too)
   std::size_t num_fallbacks = 0;
   double mean_iterations = 0.0;        ///< over the matched-or-attempted scans
   double mean_match_ms = 0.0;          ///< PLICP wall time per attempted match [ms]
