@@ -1,0 +1,73 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Accuracy of the 2D scan-matching odometry (ScanOdometry, defaults) on the shared CARMEN logs and
+// on degraded variants of them (beams at 1 deg, wheel slip, an odometry prior held for 10 s): one
+// run over the whole log per benchmark; the counters are the mean relation errors against the
+// log's corrected poses over 1 and 10 scans (cm, deg), the raw odometry's over 10 scans, and the
+// scans matched from a prior-free start or fallen back to the odometry. CSM's figures on the same
+// logs are in laser2d/csm/csm_reference.json (see docs/results.md).
+
+#include <string>
+
+#include <benchmark/benchmark.h>
+
+#include "bench_data.hpp"
+#include "plumb/core/error.hpp"
+#include "plumb/scan2d/scan_odometry.hpp"
+#include "scan2d/log_variants.hpp"
+
+namespace {
+
+using plumb::test::LogVariant;
+
+void BM_ScanOdometryAccuracy(benchmark::State& state, const std::string& log_name, LogVariant variant) {
+  plumb::test::ScanLog log;
+  try {
+    log = plumb::test::degrade(
+        plumb::test::read_scan_log(plumb::bench::data_path("laser2d/carmen_corrected/" + log_name)), variant);
+  } catch (const plumb::Error& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  plumb::ScanOdometryResult r;
+  for (auto _ : state) {
+    r = plumb::run_scan_odometry(log.scans, log.odometry);
+    benchmark::DoNotOptimize(r.poses.data());
+  }
+  const auto e1 = plumb::test::relation_error(r.poses, log.corrected, 1);
+  const auto e10 = plumb::test::relation_error(r.poses, log.corrected, 10);
+  const auto o10 = plumb::test::relation_error(log.odometry, log.corrected, 10);
+  state.counters["t1_cm"] = e1.trans_cm;
+  state.counters["r1_deg"] = e1.rot_deg;
+  state.counters["t10_cm"] = e10.trans_cm;
+  state.counters["r10_deg"] = e10.rot_deg;
+  state.counters["odom_t10_cm"] = o10.trans_cm;
+  state.counters["odom_r10_deg"] = o10.rot_deg;
+  state.counters["prior_free"] = static_cast<double>(r.num_prior_free);
+  state.counters["fallbacks"] = static_cast<double>(r.num_fallbacks);
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * log.scans.size()));
+}
+
+void register_all() {
+  const std::string logs[] = {"intel-corrected.log.gz", "freiburg-079-corrected.log.gz",
+                              "infinite-corridor-corrected.log.gz"};
+  for (const std::string& log : logs) {
+    const std::string short_name = log.substr(0, log.find('-'));
+    for (LogVariant v : {LogVariant::kOriginal, LogVariant::kOneDegree, LogVariant::kSlip, LogVariant::kHeldOdometry}) {
+      benchmark::RegisterBenchmark(("scan_odometry_accuracy/" + short_name + "/" + plumb::test::to_string(v)).c_str(),
+                                   BM_ScanOdometryAccuracy, log, v)
+          ->Iterations(1)
+          ->Unit(benchmark::kMillisecond);
+    }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  register_all();
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
