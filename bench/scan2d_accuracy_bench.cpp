@@ -3,7 +3,8 @@
 // on degraded variants of them (beams at 1 deg, wheel slip, an odometry prior held for 10 s): one
 // run over the whole log per benchmark; the counters are the mean relation errors against the
 // log's corrected poses over 1 and 10 scans (cm, deg), the raw odometry's over 10 scans, and the
-// scans matched from a prior-free start or fallen back to the odometry. CSM's figures on the same
+// scans matched from a prior-free start or fallen back to the odometry; `_fused` runs are the same
+// with ScanOdometrySettings::fuse_prior on. CSM's figures on the same
 // logs are in laser2d/csm/csm_reference.json (see docs/results.md).
 
 #include <string>
@@ -19,7 +20,7 @@ namespace {
 
 using plumb::test::LogVariant;
 
-void BM_ScanOdometryAccuracy(benchmark::State& state, const std::string& log_name, LogVariant variant) {
+void BM_ScanOdometryAccuracy(benchmark::State& state, const std::string& log_name, LogVariant variant, bool fuse) {
   plumb::test::ScanLog log;
   try {
     log = plumb::test::degrade(
@@ -28,9 +29,11 @@ void BM_ScanOdometryAccuracy(benchmark::State& state, const std::string& log_nam
     state.SkipWithError(e.what());
     return;
   }
+  plumb::ScanOdometrySettings settings;
+  settings.fuse_prior = fuse;
   plumb::ScanOdometryResult r;
   for (auto _ : state) {
-    r = plumb::run_scan_odometry(log.scans, log.odometry);
+    r = plumb::run_scan_odometry(log.scans, log.odometry, settings);
     benchmark::DoNotOptimize(r.poses.data());
   }
   const auto e1 = plumb::test::relation_error(r.poses, log.corrected, 1);
@@ -52,11 +55,14 @@ void register_all() {
                               "infinite-corridor-corrected.log.gz"};
   for (const std::string& log : logs) {
     const std::string short_name = log.substr(0, log.find('-'));
-    for (LogVariant v : {LogVariant::kOriginal, LogVariant::kOneDegree, LogVariant::kSlip, LogVariant::kHeldOdometry}) {
-      benchmark::RegisterBenchmark(("scan_odometry_accuracy/" + short_name + "/" + plumb::test::to_string(v)).c_str(),
-                                   BM_ScanOdometryAccuracy, log, v)
-          ->Iterations(1)
-          ->Unit(benchmark::kMillisecond);
+    for (const bool fuse : {false, true}) {
+      for (LogVariant v : {LogVariant::kOriginal, LogVariant::kOneDegree, LogVariant::kSlip, LogVariant::kHeldOdometry}) {
+        const std::string name = std::string(fuse ? "scan_odometry_accuracy_fused/" : "scan_odometry_accuracy/") +
+                                 short_name + "/" + plumb::test::to_string(v);
+        benchmark::RegisterBenchmark(name.c_str(), BM_ScanOdometryAccuracy, log, v, fuse)
+            ->Iterations(1)
+            ->Unit(benchmark::kMillisecond);
+      }
     }
   }
 }
