@@ -29,7 +29,7 @@ int main(int argc, char** argv) {
   }
   try {
     // 1. The building.
-    const bim::BimMesh mesh = bim::build_mesh(bim::read_ifc(argv[1]));
+    const bim::BimMesh mesh = bim::build_mesh(bim::read_ifc(argv[1]), bim::mesh_settings_with_spaces());
     const auto bim_cloud = std::make_shared<const PointCloud>(sample_bim_cloud(mesh, 0.05));
     const io::FrameDumpReader dump(argv[2]);
     const Eigen::Isometry3d T_base_lidar = dump.meta().T_base_lidar;

@@ -66,7 +66,7 @@ void run_demo(const DemoCommandOptions& o) {
   const bim::DemoBuildingResult b = bim::write_demo_building(model_path, building);
   say("wrote " + o.out_dir + "/demo_office.ifc (" + std::to_string(b.num_walls) + " walls, " + std::to_string(b.num_doors) +
       " doors, " + std::to_string(b.num_windows) + " windows)");
-  const bim::BimMesh mesh = bim::build_mesh(bim::read_ifc(model_path));
+  const bim::BimMesh mesh = bim::build_mesh(bim::read_ifc(model_path), bim::mesh_settings_with_spaces());
 
   sim::ScenarioSettings s = sim::scenario_defaults(sim::ScenarioKind::kIndoor);
   s.seed = o.seed;

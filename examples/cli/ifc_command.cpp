@@ -44,12 +44,15 @@ struct Loaded {
   double mesh_seconds = 0.0;
 };
 
-Loaded load(const std::string& path) {
+/// `with_spaces`: also mesh the rooms (IfcSpace), which a floor plan may need and a cloud must not hold.
+Loaded load(const std::string& path, bool with_spaces) {
   io::check_input_file(path);  // "is a directory" rather than the STEP parser's "not a STEP file"
   const auto t0 = std::chrono::steady_clock::now();
   bim::IfcModel model = bim::read_ifc(path);
   const auto t1 = std::chrono::steady_clock::now();
-  bim::BimMesh mesh = bim::build_mesh(model);
+  bim::BimMeshSettings mesh_settings;
+  mesh_settings.include_spaces = with_spaces;
+  bim::BimMesh mesh = bim::build_mesh(model, mesh_settings);
   const auto t2 = std::chrono::steady_clock::now();
   Loaded l{std::move(model), std::move(mesh), 0.0, 0.0};
   l.parse_seconds = std::chrono::duration<double>(t1 - t0).count();
@@ -60,7 +63,7 @@ Loaded load(const std::string& path) {
 nlohmann::json vec_json(const Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
 void run_ifcinfo(const IfcOptions& o) {
-  const Loaded l = load(o.model);
+  const Loaded l = load(o.model, true);
   const auto& m = l.mesh;
   std::map<std::string, std::pair<std::size_t, std::size_t>> counts;  // type -> (with, without) geometry
   for (const auto& e : m.elements) {
@@ -112,7 +115,9 @@ void run_ifcinfo(const IfcOptions& o) {
     std::printf("  storey %zu '%s' at %.3f m", i, m.storeys[i].name.c_str(), m.storeys[i].elevation);
     if (i < floors.size()) {
       std::printf(": %.1f m^2 walkable (%s)", floors[i].free_area,
-                  floors[i].source == bim::FloorSource::kWalls ? "enclosed by walls, no floor modelled" : "floor surfaces");
+                  floors[i].source == bim::FloorSource::kWalls    ? "enclosed by walls, no floor modelled"
+                  : floors[i].source == bim::FloorSource::kSpaces ? "room footprints (IfcSpace), floor not modelled"
+                                                                  : "floor surfaces");
     }
     std::printf("\n");
   }
@@ -137,7 +142,7 @@ std::vector<std::string> split_list(const std::string& s) {
 }
 
 void run_ifc2cloud(const IfcOptions& o) {
-  const Loaded l = load(o.model);
+  const Loaded l = load(o.model, false);
   const auto& m = l.mesh;
   bim::SurfaceSampleSettings s;
   s.spacing = o.spacing;

@@ -43,7 +43,7 @@ void run(const RunOptions& o) {
   const io::FrameDumpReader dump(o.dump_dir);
   // Before the work: an unwritable or foreign output directory is found now, not after the last frame.
   OutputDir out(o.out_dir, "run", run_output_names(), o.overwrite, true);
-  const bim::BimMesh mesh = bim::build_mesh(bim::read_ifc(o.model));
+  const bim::BimMesh mesh = bim::build_mesh(bim::read_ifc(o.model), bim::mesh_settings_with_spaces());
   RunSettings settings;
   settings.max_frames = o.max_frames;
   settings.odometry.use_bim = !o.no_bim;

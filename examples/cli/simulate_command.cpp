@@ -87,7 +87,7 @@ void run_simulate(const SimulateOptions& o) {
   }
   // Before the work: an unwritable or foreign output directory is found now.
   OutputDir out(o.output_dir, "simulate", frame_dump_names(), o.overwrite, false);
-  const bim::BimMesh mesh = bim::build_mesh(bim::read_ifc(o.model_path));
+  const bim::BimMesh mesh = bim::build_mesh(bim::read_ifc(o.model_path), bim::mesh_settings_with_spaces());
   s.storey = o.storey.empty() ? -1 : bim::find_storey(mesh, o.storey);
   const sim::ScenarioResult r = sim::simulate_scenario(mesh, out.staging(), s);
   out.commit();

@@ -137,6 +137,11 @@ void fill_cross_section(const OccupancyGrid& g, const BimMesh& mesh, const BimEl
   }
 }
 
+bool has_type(const BimMesh& mesh, std::int32_t element, const std::vector<std::string>& types) {
+  const std::string& type = type_of(mesh, element);
+  return !type.empty() && std::find(types.begin(), types.end(), type) != types.end();
+}
+
 bool is_door(const BimMesh& mesh, std::int32_t element) {
   const std::string& type = type_of(mesh, element);
   return type == "IfcDoor" || type == "IfcDoorStandardCase";
@@ -241,6 +246,7 @@ OccupancyGrid slice_storey(const BimMesh& mesh, int storey, const OccupancyGridS
   const double slice_lo = g.floor_z + s.slice_min, slice_hi = g.floor_z + s.slice_max;
   // Doors are open for the robot but close a room: the walls' enclosure (below) needs them.
   std::vector<std::uint8_t> door(floor.size(), 0);
+  std::vector<std::uint8_t> space(floor.size(), 0);  // room footprints (space_types)
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     const std::int32_t element = t < mesh.triangle_element.size() ? mesh.triangle_element[t] : -1;
     const auto& tri = mesh.triangles[t];
@@ -248,16 +254,28 @@ OccupancyGrid slice_storey(const BimMesh& mesh, int storey, const OccupancyGridS
     const Vector3d& b = mesh.vertices[tri[1]];
     const Vector3d& c = mesh.vertices[tri[2]];
     const double zmin = std::min({a.z(), b.z(), c.z()}), zmax = std::max({a.z(), b.z(), c.z()});
+    const Vector3d n = (b - a).cross(c - a);
+    const double nn = n.norm();
+    const bool horizontal_in_floor_band = nn > 0.0 && std::abs(n.z()) > 0.95 * nn && zmin >= floor_lo && zmax <= floor_hi;
+    if (has_type(mesh, element, s.space_types)) {
+      if (horizontal_in_floor_band) {
+        rasterize_triangle(g, a.head<2>(), b.head<2>(), c.head<2>(), false, [&](std::size_t i) { space[i] = 1; });
+      }
+    }
     if (is_ignored(mesh, element, s.ignored_types)) {
       if (is_door(mesh, element) && zmax >= slice_lo && zmin <= slice_hi) {
         rasterize_triangle(g, a.head<2>(), b.head<2>(), c.head<2>(), true, [&](std::size_t i) { door[i] = 1; });
       }
       continue;
     }
+    if (has_type(mesh, element, s.unwalkable_types)) {
+      if (zmax >= floor_lo && zmin <= slice_hi) {
+        rasterize_triangle(g, a.head<2>(), b.head<2>(), c.head<2>(), true, [&](std::size_t i) { occupied[i] = 1; });
+      }
+      continue;
+    }
     // Floor: a (near) horizontal triangle within the floor band.
-    const Vector3d n = (b - a).cross(c - a);
-    const double nn = n.norm();
-    if (nn > 0.0 && std::abs(n.z()) > 0.95 * nn && zmin >= floor_lo && zmax <= floor_hi) {
+    if (horizontal_in_floor_band) {
       rasterize_triangle(g, a.head<2>(), b.head<2>(), c.head<2>(), false,
                          [&](std::size_t i) { floor[i] = 1; });
     }
@@ -290,17 +308,26 @@ OccupancyGrid slice_storey(const BimMesh& mesh, int storey, const OccupancyGridS
   g.has_doors = std::find(door.begin(), door.end(), 1) != door.end();
   if (s.enclosure_gap <= 0.0) return g;
   // Floor surfaces missing under much of what the walls enclose (a ground slab kept in the
-  // structural model, floors not modelled): the floor is what the walls, windows and doors enclose.
+  // structural model, floors not modelled): the rooms' footprints when they make up the floor,
+  // else what the walls, windows and doors enclose.
   const std::vector<std::uint8_t> inside = enclosed_cells(g, occupied, door, s.enclosure_gap);
   OccupancyGrid walls = g;
   walls.floor_source = FloorSource::kWalls;
   for (std::size_t i = 0; i < floor.size(); ++i) {
     walls.cells[i] = occupied[i] ? CellState::kOccupied : (inside[i] ? CellState::kFree : CellState::kOutside);
   }
-  const double surface_area = g.free_area(), walls_area = walls.free_area();
-  const bool surfaces_enough =
-      surface_area >= s.min_walkable_area && surface_area >= s.min_surface_fraction * walls_area;
-  return !surfaces_enough && walls_area > surface_area ? walls : g;
+  const double walls_area = walls.free_area();
+  auto enough = [&](double area) { return area >= s.min_walkable_area && area >= s.min_surface_fraction * walls_area; };
+  const double surface_area = g.free_area();
+  if (enough(surface_area)) return g;
+  OccupancyGrid rooms = g;
+  rooms.floor_source = FloorSource::kSpaces;
+  for (std::size_t i = 0; i < floor.size(); ++i) {
+    if (space[i] && !occupied[i]) rooms.cells[i] = CellState::kFree;
+  }
+  const double rooms_area = rooms.free_area();
+  if (rooms_area > surface_area && enough(rooms_area)) return rooms;
+  return walls_area > surface_area ? walls : g;
 }
 
 void check_settings(const BimMesh& mesh, const OccupancyGridSettings& s) {
@@ -348,7 +375,7 @@ OccupancyGrid floor_plan(const BimMesh& mesh, const OccupancyGridSettings& setti
                                       << " m above it)");
     return g;
   }
-  // The largest walkable storey, preferring floors that are modelled, then enclosures with doors
+  // The largest walkable storey, preferring floors that are modelled, then rooms, then enclosures with doors
   // (a foundation's walls enclose as much as the floor above, but no robot drives there).
   OccupancyGrid best;
   double best_area = -1.0;
@@ -357,7 +384,8 @@ OccupancyGrid floor_plan(const BimMesh& mesh, const OccupancyGridSettings& setti
     OccupancyGrid g = slice_storey(mesh, k, settings);
     const double area = g.free_area();
     const int rank = area < settings.min_walkable_area ? 0
-                     : g.floor_source == FloorSource::kSurfaces ? 3
+                     : g.floor_source == FloorSource::kSurfaces ? 4
+                     : g.floor_source == FloorSource::kSpaces ? 3
                      : g.has_doors ? 2
                                    : 1;
     if (rank > best_rank || (rank == best_rank && area > best_area)) {

@@ -160,7 +160,7 @@ BimLocalizer::BimLocalizer(const bim::BimMesh& mesh, const PointCloud& bim_cloud
     }
     m.index = k;
     m.floor_z = grid->floor_z;
-    m.floor_modelled = grid->floor_source == bim::FloorSource::kSurfaces;
+    m.floor_modelled = bim::is_modelled(grid->floor_source);
     // Search every free floor cell, also those farther than the map margin from any wall (a
     // terrace, a hall): the map's translations cover the free floor's box.
     CorrelativeMapSettings map_settings = settings_.map;

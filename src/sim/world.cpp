@@ -127,7 +127,8 @@ World::World(const bim::BimMesh& mesh, const WorldSettings& settings)
   for (std::size_t e = 0; e < num_elements; ++e) {
     const bim::BimElement& el = mesh.elements[e];
     element_class_[e] = sim_class_of_type(el.type);
-    if (!perturb) continue;
+    // Rooms are not built: no deviation drawn, so a mesh with its spaces simulates the same world.
+    if (!perturb || el.type == "IfcSpace") continue;
     const Vector3d w(rng.normal(), rng.normal(), rng.normal());
     const Vector3d t(rng.normal(), rng.normal(), rng.normal());
     const Eigen::Matrix3d R = small_rotation(w * s.as_built_sigma_rad);

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "plumb/bim/floor_plan.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -279,6 +281,141 @@ TEST(FloorPlanTest, ModelledFloorsAreKeptOnEverySharedModel) {
       if (g.floor_source == FloorSource::kWalls) continue;  // a storey whose floor is not modelled
       EXPECT_EQ(g.cells, floor_plan(mesh, surfaces_only).cells) << file << " storey " << k;
     }
+  }
+}
+
+}  // namespace
+}  // namespace plumb::bim
+
+namespace plumb::bim {
+namespace {
+
+// A stair flight of 1 m wide steps, 0.17 m rise, 0.3 m going, rising along +x from (x0, y0).
+void add_stair(BimMesh& m, double x0, double y0, int steps, const std::string& type) {
+  for (int k = 0; k < steps; ++k) {
+    add_box(m, {x0 + 0.3 * k, y0, 0.0}, {x0 + 0.3 * (k + 1), y0 + 1.0, 0.17 * (k + 1)}, type);
+  }
+}
+
+// A wheeled robot cannot climb a stair or a steep ramp: its first step (below the obstacle slice)
+// is not floor, and neither is the rest of its footprint.
+TEST(FloorPlanTest, StairsAreNotWalkable) {
+  BimMesh m = three_rooms(true);
+  add_stair(m, 1.0, 1.0, 6, "IfcStairFlight");
+  const OccupancyGrid g = floor_plan(m);
+  OccupancyGridSettings walkable_stairs;
+  walkable_stairs.unwalkable_types.clear();
+  const OccupancyGrid old = floor_plan(m, walkable_stairs);
+  // Independent reference: the stair's footprint [1, 2.8] x [1, 2], cell centres strictly inside.
+  std::size_t under = 0, free_with_default = 0, free_when_walkable = 0;
+  for (int iy = 0; iy < g.height; ++iy) {
+    for (int ix = 0; ix < g.width; ++ix) {
+      const Vector2d c = g.center(ix, iy);
+      if (c.x() <= 1.0 || c.x() >= 2.8 || c.y() <= 1.0 || c.y() >= 2.0) continue;
+      ++under;
+      free_with_default += g.at(ix, iy) == CellState::kFree ? 1 : 0;
+      free_when_walkable += old.at(ix, iy) == CellState::kFree ? 1 : 0;
+    }
+  }
+  ASSERT_GT(under, 500u);
+  EXPECT_EQ(free_with_default, 0u);
+  EXPECT_GT(free_when_walkable, 50u);  // the first step reads as floor when stairs are not singled out
+  EXPECT_TRUE(g.is_free({3.5, 1.5}));   // beside the stair the floor is free
+}
+
+// The shared models' stairs: no free cell lies under a stair triangle crossing the floor band or
+// the obstacle slice (brute force over the triangles).
+TEST(FloorPlanTest, SharedModelsStairsAreOccupied) {
+  for (const char* file : {"ifc/buildings/AC20-FZK-Haus.ifc", "ifc/buildings/duplex.ifc"}) {
+    PLUMB_REQUIRE_DATA(path, file);
+    const BimMesh mesh = build_mesh(read_ifc(path));
+    const OccupancyGridSettings s;
+    const OccupancyGrid g = floor_plan(mesh, s);
+    const double lo = g.floor_z - s.floor_below, hi = g.floor_z + s.slice_max;
+    std::size_t stair_triangles = 0, free_under = 0;
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      const std::string& type = mesh.elements[static_cast<std::size_t>(mesh.triangle_element[t])].type;
+      if (type != "IfcStair" && type != "IfcStairFlight") continue;
+      const Vector3d& a = mesh.vertices[mesh.triangles[t][0]];
+      const Vector3d& b = mesh.vertices[mesh.triangles[t][1]];
+      const Vector3d& c = mesh.vertices[mesh.triangles[t][2]];
+      if (std::max({a.z(), b.z(), c.z()}) < lo || std::min({a.z(), b.z(), c.z()}) > hi) continue;
+      ++stair_triangles;
+      const double area2 = (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
+      if (std::abs(area2) < 1e-9) continue;
+      for (int iy = 0; iy < g.height; ++iy) {
+        for (int ix = 0; ix < g.width; ++ix) {
+          if (g.at(ix, iy) != CellState::kFree) continue;
+          const Vector2d p = g.center(ix, iy);
+          const double w0 = ((b - a).x() * (p - a.head<2>()).y() - (b - a).y() * (p - a.head<2>()).x()) / area2;
+          const double w1 = ((p - a.head<2>()).x() * (c - a).y() - (p - a.head<2>()).y() * (c - a).x()) / area2;
+          if (w0 >= 0.0 && w1 >= 0.0 && w0 + w1 <= 1.0) ++free_under;
+        }
+      }
+    }
+    EXPECT_GT(stair_triangles, 0u) << file;
+    EXPECT_EQ(free_under, 0u) << file;
+  }
+}
+
+// Rooms (IfcSpace) make the floor where no floor surface is modelled and the walls do not close
+// (a glazed side, a missing wall): the walls' enclosure leaks, the rooms' footprints do not.
+TEST(FloorPlanTest, RoomsMakeTheFloorWhereSlabsAreMissingAndWallsDoNotClose) {
+  BimMesh m;
+  m.storeys.push_back({1, "Ground", 0.0});
+  add_box(m, {0, 0, 0}, {12, 0.2, 2.8}, "IfcWallStandardCase");
+  add_box(m, {0, 0, 0}, {0.2, 8, 2.8}, "IfcWallStandardCase");
+  add_box(m, {11.8, 0, 0}, {12, 8, 2.8}, "IfcWallStandardCase");  // no wall along y = 8
+  add_box(m, {0.2, 0.2, 0.0}, {11.8, 8.0, 2.8}, "IfcSpace");
+  add_box(m, {5, 3, 0}, {5.4, 3.4, 2.8}, "IfcColumn");
+  const OccupancyGrid g = floor_plan(m);
+  EXPECT_EQ(g.floor_source, FloorSource::kSpaces);
+  EXPECT_FALSE(is_modelled(g.floor_source));
+  EXPECT_STREQ(to_string(g.floor_source), "spaces");
+  // The room's area less the column's, to the cells along their edges.
+  EXPECT_NEAR(g.free_area(), 11.6 * 7.8 - 0.16, 0.05 * 2 * (11.6 + 7.8 + 0.8));
+  EXPECT_FALSE(g.is_free({5.2, 3.2}));  // the column
+  EXPECT_FALSE(g.is_free({6.0, 8.5}));  // beyond the open side
+  // Without the room, the open side lets the outside in: no walkable floor.
+  OccupancyGridSettings no_rooms;
+  no_rooms.space_types.clear();
+  EXPECT_THROW(floor_plan(m, no_rooms), Error);
+}
+
+// The shared models with their slabs, coverings and roofs taken out but their rooms kept (an
+// architectural export without floors): the rooms make the driven storey's floor, and it matches
+// the model's own floor (the independent reference: the slab that was taken out).
+TEST(FloorPlanTest, SharedModelsWithRoomsButNoFloorsAreWalkableFromTheRooms) {
+  for (const char* file : {"ifc/buildings/AC20-FZK-Haus.ifc", "ifc/buildings/duplex.ifc"}) {
+    PLUMB_REQUIRE_DATA(path, file);
+    const BimMesh mesh = build_mesh(read_ifc(path), mesh_settings_with_spaces());
+    const OccupancyGrid full = floor_plan(mesh);
+    ASSERT_EQ(full.floor_source, FloorSource::kSurfaces) << file;
+    const BimMesh rooms_only = test::without_types(mesh, {"IfcSlab", "IfcCovering", "IfcRoof"});
+    OccupancyGridSettings s;
+    s.storey = full.storey;
+    const OccupancyGrid rooms = floor_plan(rooms_only, s);
+    EXPECT_EQ(rooms.floor_source, FloorSource::kSpaces) << file;
+    // About as close to the model's floor as the walls' enclosure of the same storey (FZK-Haus:
+    // 0.985 against 0.990; duplex: 0.680 against 0.680).
+    const OccupancyGrid walls = floor_plan(test::without_types(rooms_only, {"IfcSpace"}), s);
+    EXPECT_GE(free_iou(full, rooms), free_iou(full, walls) - 0.02) << file;
+    EXPECT_GT(free_iou(full, rooms), 0.6) << file;
+  }
+}
+
+// Slicing goes by height, not by the storey an element is filed under: an export that files every
+// element under one storey gives the same floor plans.
+TEST(FloorPlanTest, AnElementFiledUnderAnotherStoreyIsUsedWhereItsGeometryIs) {
+  PLUMB_REQUIRE_DATA(path, "ifc/buildings/duplex.ifc");
+  const BimMesh mesh = build_mesh(read_ifc(path));
+  BimMesh misfiled = mesh;
+  for (BimElement& e : misfiled.elements) e.storey = static_cast<int>(mesh.storeys.size()) - 1;
+  for (std::size_t k = 0; k < mesh.storeys.size(); ++k) {
+    OccupancyGridSettings s;
+    s.storey = static_cast<int>(k);
+    s.min_walkable_area = 0.0;
+    EXPECT_EQ(floor_plan(misfiled, s).cells, floor_plan(mesh, s).cells) << "storey " << k;
   }
 }
 

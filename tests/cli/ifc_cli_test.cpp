@@ -51,7 +51,10 @@ TEST_F(CliTest, IfcinfoCountsFzkHausElements) {
   EXPECT_EQ(total("IfcDoor"), 5);
   EXPECT_EQ(total("IfcWindow"), 11);
   EXPECT_EQ(e.at("IfcWallStandardCase").at("with_geometry").get<int>(), 13);
+  // The rooms are meshed too (a floor plan may need them): all 7 IfcSpace of the file.
+  EXPECT_EQ(e.at("IfcSpace").at("with_geometry").get<int>(), 7);
   EXPECT_EQ(j.at("storeys").size(), 2u);
+  EXPECT_EQ(j.at("storeys")[0].at("floor_source"), "surfaces");
 }
 
 TEST_F(CliTest, Ifc2cloudWritesOnlyTheRequestedTypeInsideItsElements) {

@@ -187,6 +187,24 @@ TEST(ScenarioTest, IndoorRouteInAModelWithoutFloorsStaysOnTheRealFloor) {
   }
 }
 
+// The same export with its rooms (IfcSpace) kept: the rooms make the floor, the route stays on
+// the full model's floor, and the world the LiDAR sees is the one of the model without rooms.
+TEST(ScenarioTest, IndoorRouteInAModelWithRoomsButNoFloorsStaysOnTheRealFloor) {
+  PLUMB_REQUIRE_DATA(path, "ifc/buildings/AC20-FZK-Haus.ifc");
+  const bim::BimMesh with_rooms = bim::build_mesh(bim::read_ifc(path), bim::mesh_settings_with_spaces());
+  const bim::BimMesh bare = test::without_types(with_rooms, {"IfcSlab", "IfcCovering"});
+  ScenarioSettings s = small_indoor(0.0);
+  s.storey = 0;  // both storeys have rooms; the ground floor is the one the full model drives
+  const ScenarioPlan plan = plan_scenario(bare, s);
+  EXPECT_EQ(plan.grid.floor_source, bim::FloorSource::kSpaces);
+  EXPECT_GT(plan.route.length, 15.0);
+  const bim::OccupancyGrid real = bim::floor_plan(fzk_haus());
+  for (std::size_t k = 0; k < plan.trajectory.states.size(); k += 10) {
+    const RobotState& st = plan.trajectory.states[k];
+    ASSERT_TRUE(real.is_free({st.pose.x, st.pose.y})) << "t = " << st.t;
+  }
+}
+
 // A route that cannot be made is an error naming why, not a route of 0 m.
 TEST(ScenarioTest, ARouteTooShortIsAnError) {
   bim::OccupancyGrid g;

@@ -25,10 +25,17 @@ enum class CellState : std::uint8_t {
 enum class FloorSource : std::uint8_t {
   kSurfaces = 0,  ///< horizontal faces near the storey elevation (slabs, floor coverings, ...)
   kWalls = 1,     ///< the region enclosed by the storey's walls and doors (no floor surface modelled)
+  kSpaces = 2,    ///< the footprints of the storey's rooms (IfcSpace), with what floor surfaces there are
 };
 
-/// @brief Stable lower-case name: "surfaces" or "walls".
-inline const char* to_string(FloorSource s) { return s == FloorSource::kWalls ? "walls" : "surfaces"; }
+/// @brief Stable lower-case name: "surfaces", "walls" or "spaces".
+inline const char* to_string(FloorSource s) {
+  return s == FloorSource::kWalls ? "walls" : s == FloorSource::kSpaces ? "spaces" : "surfaces";
+}
+
+/// @brief True when the floor is matter a scanner sees (slabs, coverings), not derived from rooms
+///        or walls.
+inline bool is_modelled(FloorSource s) { return s == FloorSource::kSurfaces; }
 
 /// @brief A 2D occupancy grid in the mesh frame's x-y plane; cell (ix, iy) covers
 ///        [origin + (ix, iy) * resolution, origin + (ix + 1, iy + 1) * resolution).
@@ -78,13 +85,21 @@ struct OccupancyGridSettings {
   /// IFC types that do not block the robot: doors are open, spaces and openings are not matter.
   std::vector<std::string> ignored_types = {"IfcDoor", "IfcSpace", "IfcOpeningElement",
                                             "IfcOpeningStandardCase", "IfcAnnotation", "IfcSite"};
+  /// Rooms: where the floor surfaces fall short (as for enclosure_gap), the footprints of these
+  /// elements' horizontal faces in the floor band count as floor too (FloorSource::kSpaces).
+  std::vector<std::string> space_types = {"IfcSpace"};
+  /// Not walkable by a wheeled robot: every cell under these elements, from the floor band up to
+  /// the top of the obstacle slice, is occupied (a first step or a ramp's foot would read as floor).
+  std::vector<std::string> unwalkable_types = {"IfcStair", "IfcStairFlight", "IfcRamp", "IfcRampFlight"};
 };
 
 /// @brief Floor-plan slice of one storey: cells with a floor surface near the storey elevation
 ///        (upward or downward facing horizontal triangles) that no element crosses between
 ///        slice_min and slice_max above it are free; cells crossed are occupied; the rest outside.
-///        Where the floor surfaces are missing (see enclosure_gap), the cells enclosed by the
-///        storey's walls and doors are the floor instead (OccupancyGrid::floor_source = kWalls).
+///        Where the floor surfaces are missing (see enclosure_gap), the footprints of the storey's
+///        rooms (space_types) are added when they make up the floor (kSpaces), else the cells
+///        enclosed by the storey's walls and doors are the floor (kWalls). Stairs and ramps
+///        (unwalkable_types) are occupied.
 ///        With storey = -1, the largest storey with modelled floors is taken, else the largest
 ///        enclosure with doors, else the largest enclosure.
 /// @param mesh building mesh (openings already cut by build_mesh()).

@@ -66,6 +66,15 @@ struct BimMeshSettings {
   int max_depth = 48;                ///< reference-chain depth limit (cycles -> warning)
 };
 
+/// @brief Settings for the mesh of a building a robot drives in: with its rooms (IfcSpace), whose
+///        footprints floor_plan() takes where the floors are not modelled; the simulator, the BIM
+///        cloud and the floor plan's obstacles leave them out.
+inline BimMeshSettings mesh_settings_with_spaces() {
+  BimMeshSettings s;
+  s.include_spaces = true;
+  return s;
+}
+
 /// @brief Mesh every product with a Body representation.
 /// @return the mesh; problems with single entities are collected in BimMesh::warnings.
 /// @throws plumb::Error only for problems with the whole model (none today besides misuse).
