@@ -122,7 +122,7 @@ const SiteRun& site16() {
     run->frames.push_back(dump.frame(i));
     run->stamps.push_back(dump.stamp(i));
   }
-  for (const io::ImuSample& m : dump.imu()) run->imu.push_back({m.stamp, m.w_imu, m.f_imu});
+  run->imu = dump.imu();
   run->T0 = dump.ground_truth().poses.front();
   run->settings.T_base_lidar = dump.meta().T_base_lidar;
   run->settings.T_base_imu = dump.meta().T_base_imu;

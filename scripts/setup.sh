@@ -7,7 +7,7 @@
 set -euo pipefail
 
 packages=(cmake g++ make libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev liblzf-dev zlib1g-dev
-          libcli11-dev nlohmann-json3-dev ccache)
+          libcli11-dev nlohmann-json3-dev ccache python3)
 for arg in "$@"; do
   case "$arg" in
     --fuzz) packages+=(clang libclang-rt-14-dev) ;;

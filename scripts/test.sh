@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: BSD-3-Clause
-# README command 2 (and CI): install what is missing; release build with -Werror (library, CLI,
-# examples, benchmarks) and the find_package consumer; the demo's steps of README command 1 on that
-# build; every test built and run under ASan+UBSan; each fuzzer for PLUMB_FUZZ_SECONDS (30), one
-# per core at a time.
+# README command 2 (and CI): install what is missing; the layering and file-length check; release
+# build with -Werror (library, CLI, examples, benchmarks) and the find_package consumer; the demo's
+# steps of README command 1 on that build; every test built and run under ASan+UBSan; each fuzzer
+# for PLUMB_FUZZ_SECONDS (30), one per core at a time.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root="$(pwd)"
@@ -26,6 +26,9 @@ export PLUMB_DATA_DIR="$data_dir"
 
 start_time=$SECONDS
 step() { echo; echo "== [$((SECONDS - start_time)) s] $*"; }
+
+step "house rules a compiler does not check: layering and file lengths (scripts/check_layering.py)"
+python3 scripts/check_layering.py
 
 step "release build (-Werror): library, CLI, examples, benchmarks"
 cmake -S . -B build/ci "${launcher[@]}" -DCMAKE_BUILD_TYPE=Release -DPLUMB_WERROR=ON -DPLUMB_DATA_DIR="$data_dir" \

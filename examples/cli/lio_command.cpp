@@ -122,11 +122,7 @@ void run(const LioOptions& o) {
     }
     // The IMU up to the end of this frame's sweep (what a live system has when the sweep is complete).
     while (next_imu < imu.size() && imu[next_imu].stamp <= stamp + sweep + 0.02) {
-      ImuSample sample;
-      sample.stamp = imu[next_imu].stamp;
-      sample.gyro = imu[next_imu].w_imu;
-      sample.accel = imu[next_imu].f_imu;
-      lio->add_imu(sample);
+      lio->add_imu(imu[next_imu]);
       ++next_imu;
     }
     LioFrameResult r;

@@ -8,10 +8,12 @@
 #include "plumb/version.hpp"
 
 #include "plumb/core/error.hpp"
+#include "plumb/core/laser_scan.hpp"
 #include "plumb/core/lie.hpp"
 #include "plumb/core/point_cloud.hpp"
 #include "plumb/core/pose2.hpp"
 #include "plumb/core/rng.hpp"
+#include "plumb/core/sensor_data.hpp"
 #include "plumb/core/status.hpp"
 #include "plumb/core/trajectory.hpp"
 #include "plumb/core/types.hpp"
@@ -60,7 +62,6 @@
 
 #include "plumb/scan2d/cloud_to_scan.hpp"
 #include "plumb/scan2d/correlative.hpp"
-#include "plumb/scan2d/laser_scan.hpp"
 #include "plumb/scan2d/plicp.hpp"
 #include "plumb/scan2d/scan_odometry.hpp"
 

@@ -288,11 +288,6 @@ CarmenLog read_carmen(const std::string& path, const CarmenReadSettings& setting
   return read_carmen_buffer(data.data(), data.size(), path, settings);
 }
 
-Pose2 interpolate_pose2(const Pose2& a, const Pose2& b, double alpha) {
-  const Pose2 r = a.ominus().oplus(b);
-  return a.oplus(Pose2{alpha * r.x, alpha * r.y, alpha * wrap_angle(r.theta)});
-}
-
 std::vector<Pose2> raw_odometry_at_lasers(const CarmenLog& log) {
   std::vector<Pose2> out;
   if (log.lasers.empty()) return out;

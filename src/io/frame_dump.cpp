@@ -688,7 +688,7 @@ void FrameDumpWriter::write_odometry(const std::vector<OdomSample>& odometry) {
 
 void FrameDumpWriter::write_imu(const std::vector<ImuSample>& imu) {
   write_csv(join_path(dir_, "imu.csv"), kImuHeader, imu, [](std::string& s, const ImuSample& m) {
-    append_values(s, {m.stamp, m.w_imu.x(), m.w_imu.y(), m.w_imu.z(), m.f_imu.x(), m.f_imu.y(), m.f_imu.z()});
+    append_values(s, {m.stamp, m.gyro.x(), m.gyro.y(), m.gyro.z(), m.accel.x(), m.accel.y(), m.accel.z()});
   });
 }
 

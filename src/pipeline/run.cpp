@@ -10,7 +10,7 @@
 
 #include "plumb/bim/sample.hpp"
 #include "plumb/core/error.hpp"
-#include "plumb/io/carmen.hpp"
+#include "plumb/core/sensor_data.hpp"
 
 namespace plumb {
 namespace {
@@ -27,7 +27,7 @@ double horizontal_error(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) 
 
 }  // namespace
 
-OdometryInterpolator::OdometryInterpolator(std::vector<io::OdomSample> samples) : s_(std::move(samples)) {
+OdometryInterpolator::OdometryInterpolator(std::vector<OdomSample> samples) : s_(std::move(samples)) {
   PLUMB_CHECK(!s_.empty(), "OdometryInterpolator: no odometry sample (odom.csv is empty)");
   for (std::size_t i = 1; i < s_.size(); ++i) {
     PLUMB_CHECK(s_[i].stamp > s_[i - 1].stamp, "OdometryInterpolator: stamps must increase (sample " << i << ")");
@@ -37,10 +37,10 @@ OdometryInterpolator::OdometryInterpolator(std::vector<io::OdomSample> samples) 
 Pose2 OdometryInterpolator::at(double t) const {
   if (t <= s_.front().stamp) return s_.front().pose;
   if (t >= s_.back().stamp) return s_.back().pose;
-  const auto it = std::lower_bound(s_.begin(), s_.end(), t, [](const io::OdomSample& a, double v) { return a.stamp < v; });
-  const io::OdomSample& b = *it;
-  const io::OdomSample& a = *(it - 1);
-  return io::interpolate_pose2(a.pose, b.pose, (t - a.stamp) / (b.stamp - a.stamp));
+  const auto it = std::lower_bound(s_.begin(), s_.end(), t, [](const OdomSample& a, double v) { return a.stamp < v; });
+  const OdomSample& b = *it;
+  const OdomSample& a = *(it - 1);
+  return interpolate_pose2(a.pose, b.pose, (t - a.stamp) / (b.stamp - a.stamp));
 }
 
 void deskew_frame(PointCloud& frame, double stamp, const Eigen::Isometry3d& T_base_lidar,

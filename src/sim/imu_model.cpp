@@ -65,10 +65,10 @@ ImuSimulation simulate_imu(const RobotTrajectory& trajectory, const Eigen::Isome
     // Acceleration of the IMU point in base coordinates, minus gravity (world z up, base z = world z).
     const Vector3d acc_base = Vector3d(st.a, st.v * st.w, 0.0) + alpha_base.cross(r) + w_base.cross(w_base.cross(r));
     const Vector3d f_base = acc_base + Vector3d(0.0, 0.0, s.gravity);
-    io::ImuSample m;
+    ImuSample m;
     m.stamp = t;
-    m.w_imu = R_imu_base * w_base + bias_w + sigma_w * normal3();
-    m.f_imu = R_imu_base * f_base + bias_f + sigma_f * normal3();
+    m.gyro = R_imu_base * w_base + bias_w + sigma_w * normal3();
+    m.accel = R_imu_base * f_base + bias_f + sigma_f * normal3();
     out.samples.push_back(m);
     out.gyro_bias.push_back(bias_w);
     out.accel_bias.push_back(bias_f);

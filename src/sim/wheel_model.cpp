@@ -43,13 +43,13 @@ std::vector<WheelEncoderReading> simulate_wheels(const RobotTrajectory& trajecto
   return out;
 }
 
-std::vector<io::OdomSample> integrate_wheel_odometry(const std::vector<WheelEncoderReading>& wheels,
+std::vector<OdomSample> integrate_wheel_odometry(const std::vector<WheelEncoderReading>& wheels,
                                                      double radius_left, double radius_right, double axle,
                                                      const Pose2& start) {
   PLUMB_CHECK(radius_left > 0.0 && radius_right > 0.0 && axle > 0.0,
               "integrate_wheel_odometry: radii and axle must be positive (" << radius_left << ", " << radius_right
                                                                             << ", " << axle << ")");
-  std::vector<io::OdomSample> out;
+  std::vector<OdomSample> out;
   out.reserve(wheels.size());
   Pose2 pose = start;
   for (std::size_t k = 0; k < wheels.size(); ++k) {

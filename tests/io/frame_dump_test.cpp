@@ -143,8 +143,8 @@ TEST(FrameDumpTest, RoundTripsEveryFile) {
     EXPECT_EQ(o[k].stamp, odom[k].stamp);
     EXPECT_EQ(o[k].pose.vector(), odom[k].pose.vector());
     EXPECT_EQ(im[k].stamp, imu[k].stamp);
-    EXPECT_EQ(im[k].w_imu, imu[k].w_imu);
-    EXPECT_EQ(im[k].f_imu, imu[k].f_imu);
+    EXPECT_EQ(im[k].gyro, imu[k].gyro);
+    EXPECT_EQ(im[k].accel, imu[k].accel);
   }
   const Trajectory g = reader.ground_truth();
   ASSERT_EQ(g.size(), gt.size());

@@ -48,13 +48,7 @@ class HybridLioSiteTest : public ::testing::Test {
       run_->frames.push_back(dump.frame(i));
       run_->stamps.push_back(dump.stamp(i));
     }
-    for (const io::ImuSample& m : dump.imu()) {
-      ImuSample x;
-      x.stamp = m.stamp;
-      x.gyro = m.w_imu;
-      x.accel = m.f_imu;
-      run_->imu.push_back(x);
-    }
+    run_->imu = dump.imu();
     run_->gt = dump.ground_truth();
     run_->meta = dump.meta();
     std::filesystem::remove_all(dir);
@@ -415,8 +409,7 @@ TEST(HybridLioTest, LeavingTheHouseTheGroundPlaneKeepsFramesMoving) {
   sim::simulate_scenario(bim::build_mesh(bim::read_ifc(ifc)), dir, ss);
   const io::FrameDumpReader dump(dir);
   const Trajectory gt = dump.ground_truth();
-  std::vector<ImuSample> imu;
-  for (const io::ImuSample& m : dump.imu()) imu.push_back({m.stamp, m.w_imu, m.f_imu});
+  const std::vector<ImuSample> imu = dump.imu();
   auto end_error = [&](LioMode mode, double ground_plane_tolerance) {
     HybridLioSettings s;
     s.mode = mode;

@@ -14,7 +14,7 @@
 
 #include "plumb/core/pose2.hpp"
 #include "plumb/core/rng.hpp"
-#include "plumb/scan2d/laser_scan.hpp"
+#include "plumb/core/laser_scan.hpp"
 
 namespace plumb::test {
 

@@ -50,8 +50,8 @@ TEST(ImuTest, ZeroNoiseIntegratesToGroundTruth) {
     Vector3d v = imu_velocity(traj, T_base_imu, m[i].stamp);
     for (std::size_t k = i; k < j; ++k) {
       const double dt = m[k + 1].stamp - m[k].stamp;
-      const Eigen::Matrix3d R_next = R * so3::exp(0.5 * (m[k].w_imu + m[k + 1].w_imu) * dt);
-      v += 0.5 * (R * m[k].f_imu + R_next * m[k + 1].f_imu) * dt + g_world * dt;  // trapezoid
+      const Eigen::Matrix3d R_next = R * so3::exp(0.5 * (m[k].gyro + m[k + 1].gyro) * dt);
+      v += 0.5 * (R * m[k].accel + R_next * m[k + 1].accel) * dt + g_world * dt;  // trapezoid
       R = R_next;
     }
     const Eigen::Matrix3d R_true = (traj.T_world_base(m[j].stamp) * T_base_imu).linear();
@@ -60,8 +60,8 @@ TEST(ImuTest, ZeroNoiseIntegratesToGroundTruth) {
   }
   // At rest (the first second) the IMU measures only gravity, in its own frame.
   const Vector3d f_rest = T_base_imu.linear().transpose() * Vector3d(0, 0, s.gravity);
-  EXPECT_LT((m[10].f_imu - f_rest).norm(), 1e-12);
-  EXPECT_LT(m[10].w_imu.norm(), 1e-12);
+  EXPECT_LT((m[10].accel - f_rest).norm(), 1e-12);
+  EXPECT_LT(m[10].gyro.norm(), 1e-12);
 }
 
 TEST(ImuTest, NoiseAndBiasFollowTheSettings) {
@@ -74,8 +74,8 @@ TEST(ImuTest, NoiseAndBiasFollowTheSettings) {
   double sum_w = 0.0, sum_f = 0.0;
   std::size_t n = 0;
   for (std::size_t k = 0; k < sim.samples.size() && sim.samples[k].stamp < 0.95; ++k, ++n) {
-    sum_w += (sim.samples[k].w_imu - sim.gyro_bias[k]).squaredNorm();
-    sum_f += (sim.samples[k].f_imu - Vector3d(0, 0, s.gravity) - sim.accel_bias[k]).squaredNorm();
+    sum_w += (sim.samples[k].gyro - sim.gyro_bias[k]).squaredNorm();
+    sum_f += (sim.samples[k].accel - Vector3d(0, 0, s.gravity) - sim.accel_bias[k]).squaredNorm();
   }
   ASSERT_GT(n, 250u);
   const double sigma_w = std::sqrt(sum_w / (3.0 * n)), sigma_f = std::sqrt(sum_f / (3.0 * n));
@@ -86,9 +86,9 @@ TEST(ImuTest, NoiseAndBiasFollowTheSettings) {
   // Stamps at the rate, deterministic for a seed.
   EXPECT_NEAR(sim.samples[3].stamp - sim.samples[2].stamp, 1.0 / 300.0, 1e-12);
   const ImuSimulation again = simulate_imu(still, Eigen::Isometry3d::Identity(), s);
-  EXPECT_EQ(again.samples.back().f_imu, sim.samples.back().f_imu);
+  EXPECT_EQ(again.samples.back().accel, sim.samples.back().accel);
   s.seed = 9;
-  EXPECT_NE(simulate_imu(still, Eigen::Isometry3d::Identity(), s).samples.back().f_imu, sim.samples.back().f_imu);
+  EXPECT_NE(simulate_imu(still, Eigen::Isometry3d::Identity(), s).samples.back().accel, sim.samples.back().accel);
 }
 
 TEST(ImuTest, TacticalPresetIsTwoDegreesPerHour) {

@@ -23,7 +23,7 @@ TEST(WheelTest, ZeroNoiseOdometryIntegratesToGroundTruth) {
   const auto odom = integrate_wheel_odometry(wheels, s.radius, s.radius, s.axle, start);
   ASSERT_EQ(odom.size(), wheels.size());
   double max_err = 0.0, max_dtheta = 0.0;
-  for (const io::OdomSample& o : odom) {
+  for (const OdomSample& o : odom) {
     const RobotState truth = traj.state_at(o.stamp);
     max_err = std::max(max_err, std::hypot(o.pose.x - truth.pose.x, o.pose.y - truth.pose.y));
     max_dtheta = std::max(max_dtheta, std::abs(o.pose.theta - truth.pose.theta));

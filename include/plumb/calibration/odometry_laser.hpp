@@ -30,19 +30,11 @@
 #include <vector>
 
 #include "plumb/core/pose2.hpp"
+#include "plumb/core/sensor_data.hpp"
 #include "plumb/core/status.hpp"
 #include "plumb/core/types.hpp"
 
 namespace plumb {
-
-/// @brief One calibration sample: an interval with its mean wheel speeds and the laser's motion
-///        over the interval as estimated by a scan matcher (the fields of Censi's `.tuple` files).
-struct CalibrationTuple {
-  double T = 0.0;          ///< interval length [s], > 0
-  double phi_left = 0.0;   ///< mean left wheel angular velocity over the interval [rad/s]
-  double phi_right = 0.0;  ///< mean right wheel angular velocity over the interval [rad/s]
-  Pose2 laser_motion;      ///< ŝ: laser pose at the end in the laser frame at the start [m, rad]
-};
 
 /// @brief The six parameters: differential-drive kinematics and the laser's pose on the robot.
 struct OdometryLaserParams {

@@ -22,29 +22,12 @@
 
 #include "plumb/calibration/odometry_laser.hpp"
 #include "plumb/core/error.hpp"
+#include "plumb/core/sensor_data.hpp"
 #include "plumb/core/status.hpp"
-#include "plumb/scan2d/laser_scan.hpp"
+#include "plumb/core/laser_scan.hpp"
 #include "plumb/scan2d/plicp.hpp"
 
 namespace plumb {
-
-/// @brief One wheel encoder reading: cumulative wheel angles at a time.
-struct WheelEncoderReading {
-  double stamp = 0.0;  ///< [s]
-  double left = 0.0;   ///< cumulative left wheel angle [rad] (forward positive)
-  double right = 0.0;  ///< cumulative right wheel angle [rad] (forward positive)
-
-  /// @brief A reading from tick counters: angle = 2π ticks / ticks_per_revolution.
-  /// @throws plumb::Error when ticks_per_revolution <= 0.
-  /// @note Defined here so that the wheel-encoder reader (io) needs no calibration object code.
-  static WheelEncoderReading from_ticks(double stamp, double left_ticks, double right_ticks,
-                                        double ticks_per_revolution) {
-    PLUMB_CHECK(ticks_per_revolution > 0.0 && std::isfinite(ticks_per_revolution),
-                "WheelEncoderReading::from_ticks: ticks_per_revolution must be > 0, got " << ticks_per_revolution);
-    constexpr double kTwoPi = 6.283185307179586476925;
-    return {stamp, kTwoPi * left_ticks / ticks_per_revolution, kTwoPi * right_ticks / ticks_per_revolution};
-  }
-};
 
 /// @brief A scan matcher: the pose of `current`'s laser frame in `reference`'s laser frame, or
 ///        nothing when the match failed. `guess` is the predicted motion.

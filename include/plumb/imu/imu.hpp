@@ -12,6 +12,7 @@
 
 #include <cmath>
 
+#include "plumb/core/sensor_data.hpp"
 #include "plumb/core/types.hpp"
 
 namespace plumb {
@@ -22,13 +23,6 @@ constexpr double kStandardGravity = 9.80665;
 
 /// @brief Gravity vector of a z-up world frame: (0, 0, -g) [m/s^2].
 inline Vector3d gravity_z_up(double g = kStandardGravity) { return {0.0, 0.0, -g}; }
-
-/// @brief One IMU reading, in the IMU (body) frame.
-struct ImuSample {
-  double stamp = 0.0;                 ///< [s]
-  Vector3d gyro = Vector3d::Zero();   ///< measured angular rate w_body + b_g [rad/s]
-  Vector3d accel = Vector3d::Zero();  ///< measured specific force R^T (a_world - g_world) + b_a [m/s^2]
-};
 
 /// @brief Gyroscope and accelerometer biases, in the IMU frame.
 struct ImuBias {

@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "plumb/calibration/odometry_laser.hpp"
+#include "plumb/core/sensor_data.hpp"
 
 namespace plumb::io {
 

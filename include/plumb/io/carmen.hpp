@@ -29,7 +29,8 @@
 #include <vector>
 
 #include "plumb/core/pose2.hpp"
-#include "plumb/scan2d/laser_scan.hpp"
+#include "plumb/core/sensor_data.hpp"
+#include "plumb/core/laser_scan.hpp"
 
 namespace plumb::io {
 
@@ -115,8 +116,6 @@ CarmenLog parse_carmen(const std::string& text, const std::string& name = "<carm
 /// @throws plumb::Error when the log has lasers but no raw odometry.
 std::vector<Pose2> raw_odometry_at_lasers(const CarmenLog& log);
 
-/// @brief Interpolate between poses a (alpha = 0) and b (alpha = 1) along the relative motion
-///        r = ⊖a ⊕ b: a ⊕ (alpha r_x, alpha r_y, alpha wrap(r_theta)); angle-aware across ±pi.
-Pose2 interpolate_pose2(const Pose2& a, const Pose2& b, double alpha);
+using plumb::interpolate_pose2;  // plumb/core/sensor_data.hpp
 
 }  // namespace plumb::io

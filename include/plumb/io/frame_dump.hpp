@@ -31,23 +31,14 @@
 #include "plumb/core/point_cloud.hpp"
 #include "plumb/core/pose2.hpp"
 #include "plumb/core/trajectory.hpp"
-#include "plumb/calibration/tuple_extraction.hpp"
+#include "plumb/core/sensor_data.hpp"
 #include "plumb/io/pcd.hpp"
 
 namespace plumb::io {
 
-/// @brief One wheel-odometry pose (the base in the odometry frame).
-struct OdomSample {
-  double stamp = 0.0;  ///< [s]
-  Pose2 pose;          ///< x y [m], theta [rad]
-};
-
-/// @brief One IMU reading in the IMU frame.
-struct ImuSample {
-  double stamp = 0.0;                     ///< [s]
-  Vector3d w_imu = Vector3d::Zero();      ///< angular rate [rad/s]
-  Vector3d f_imu = Vector3d::Zero();      ///< specific force (acceleration minus gravity) [m/s^2]
-};
+// The readings a dump holds are the library's own (plumb/core/sensor_data.hpp).
+using plumb::ImuSample;
+using plumb::OdomSample;
 
 /// @brief The LiDAR as described in meta.json (informative; frames carry their own points).
 struct DumpLidar {

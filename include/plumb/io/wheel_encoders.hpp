@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "plumb/calibration/tuple_extraction.hpp"
+#include "plumb/core/sensor_data.hpp"
 
 namespace plumb::io {
 

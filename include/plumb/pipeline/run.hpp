@@ -98,13 +98,13 @@ struct RunReport {
 class OdometryInterpolator {
  public:
   /// @throws plumb::Error when there is no sample or the stamps do not increase
-  explicit OdometryInterpolator(std::vector<io::OdomSample> samples);
+  explicit OdometryInterpolator(std::vector<OdomSample> samples);
   Pose2 at(double t) const;
   double first_stamp() const { return s_.front().stamp; }
   double last_stamp() const { return s_.back().stamp; }
 
  private:
-  std::vector<io::OdomSample> s_;
+  std::vector<OdomSample> s_;
 };
 
 /// @brief The BIM cloud a LiDAR is registered to: the model's surfaces sampled every `spacing`

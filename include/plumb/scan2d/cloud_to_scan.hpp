@@ -14,7 +14,7 @@
 #include "plumb/core/point_cloud.hpp"
 #include "plumb/core/status.hpp"
 #include "plumb/core/types.hpp"
-#include "plumb/scan2d/laser_scan.hpp"
+#include "plumb/core/laser_scan.hpp"
 
 namespace plumb {
 

@@ -24,7 +24,7 @@
 #include "plumb/core/pose2.hpp"
 #include "plumb/core/status.hpp"
 #include "plumb/core/types.hpp"
-#include "plumb/scan2d/laser_scan.hpp"
+#include "plumb/core/laser_scan.hpp"
 #include "plumb/search/kdtree.hpp"
 
 namespace plumb {

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "plumb/core/pose2.hpp"
-#include "plumb/scan2d/laser_scan.hpp"
+#include "plumb/core/laser_scan.hpp"
 #include "plumb/scan2d/plicp.hpp"
 
 namespace plumb {

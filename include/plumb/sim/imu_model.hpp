@@ -12,7 +12,7 @@
 
 #include <Eigen/Geometry>
 
-#include "plumb/io/frame_dump.hpp"
+#include "plumb/core/sensor_data.hpp"
 #include "plumb/sim/robot.hpp"
 
 namespace plumb::sim {
@@ -37,7 +37,7 @@ ImuSettings imu_preset(const std::string& name);
 
 /// @brief Simulated measurements and the true biases that were added.
 struct ImuSimulation {
-  std::vector<io::ImuSample> samples;  ///< stamps every 1 / rate_hz from the trajectory's start
+  std::vector<ImuSample> samples;  ///< stamps every 1 / rate_hz from the trajectory's start
   std::vector<Vector3d> gyro_bias;     ///< true gyro bias at each sample [rad/s]
   std::vector<Vector3d> accel_bias;    ///< true accelerometer bias at each sample [m/s^2]
 };

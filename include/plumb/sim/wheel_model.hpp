@@ -9,8 +9,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "plumb/calibration/tuple_extraction.hpp"
-#include "plumb/io/frame_dump.hpp"
+#include "plumb/core/sensor_data.hpp"
 #include "plumb/sim/robot.hpp"
 
 namespace plumb::sim {
@@ -38,7 +37,7 @@ std::vector<WheelEncoderReading> simulate_wheels(const RobotTrajectory& trajecto
 ///        then the constant-curvature motion (ds, dtheta) composed with ⊕ (Liu et al. 2022, eq. 13).
 /// @param start pose of the first reading (identity = the odometry frame starts at the base).
 /// @throws plumb::Error on non-positive parameters or non-increasing stamps.
-std::vector<io::OdomSample> integrate_wheel_odometry(const std::vector<WheelEncoderReading>& wheels,
+std::vector<OdomSample> integrate_wheel_odometry(const std::vector<WheelEncoderReading>& wheels,
                                                      double radius_left, double radius_right, double axle,
                                                      const Pose2& start = Pose2{});
 
