@@ -24,6 +24,7 @@
 #include "run_output.hpp"
 #include "plumb/bim/demo_building.hpp"
 #include "plumb/bim/ifc.hpp"
+#include "plumb/core/clock.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/sim/scenario.hpp"
 
@@ -40,10 +41,6 @@ struct DemoCommandOptions {
   bool json = false;
   bool overwrite = false;
 };
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 void run_demo(const DemoCommandOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();

@@ -28,7 +28,6 @@
 namespace plumb::cli {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 struct Scan2dOptions {
   std::string log_path;

@@ -7,6 +7,7 @@
 
 #include "plumb/version.hpp"
 
+#include "plumb/core/clock.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/core/laser_scan.hpp"
 #include "plumb/core/lie.hpp"

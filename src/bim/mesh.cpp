@@ -36,7 +36,6 @@ using Loop2 = std::vector<Vector2d>;
 using Tri = std::array<std::uint32_t, 3>;
 using Args = std::vector<StepValue>;
 constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr double kPi = 3.14159265358979323846;
 
 struct Soup {
   std::vector<Vector3d> v;

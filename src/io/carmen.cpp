@@ -15,7 +15,6 @@
 namespace plumb::io {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 /// Largest beam or remission count a message may declare.
 constexpr double kMaxCount = 1e6;

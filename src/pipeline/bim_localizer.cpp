@@ -11,14 +11,11 @@
 #include <Eigen/Eigenvalues>
 
 #include "plumb/bim/floor_plan.hpp"
+#include "plumb/core/clock.hpp"
 #include "plumb/core/error.hpp"
 
 namespace plumb {
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 Eigen::Isometry3d base_pose(const Pose2& p, double z) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();

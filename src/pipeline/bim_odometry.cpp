@@ -6,16 +6,13 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "plumb/core/clock.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/core/lie.hpp"
 #include "plumb/filters/voxel_grid.hpp"
 
 namespace plumb {
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 }  // namespace
 

@@ -19,7 +19,6 @@
 namespace plumb {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kDimJoint = 30;
 using Vector30d = Eigen::Matrix<double, kDimJoint, 1>;
 using Matrix30d = Eigen::Matrix<double, kDimJoint, kDimJoint>;

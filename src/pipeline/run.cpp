@@ -9,15 +9,12 @@
 #include <set>
 
 #include "plumb/bim/sample.hpp"
+#include "plumb/core/clock.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/core/sensor_data.hpp"
 
 namespace plumb {
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 double yaw_of(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); }
 

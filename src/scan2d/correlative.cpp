@@ -13,7 +13,6 @@
 namespace plumb {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 /// One branch-and-bound node: heading `a`, translation window [jx, jx + 2^h) x [jy, jy + 2^h) of
 /// cells, and the upper bound of its score (the exact score at h = 0), in likelihood units 0..255.

@@ -11,7 +11,6 @@ namespace plumb::sim {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 /// Reflectivity of each class, scaled so a head-on return reads 255 * albedo.
 float albedo_of(SimLabel label) {

@@ -19,7 +19,6 @@ namespace plumb::sim {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
 
 std::vector<double> even_rows(int n, double lo_deg, double hi_deg) {

@@ -12,7 +12,6 @@
 namespace plumb::sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 /// SplitMix64 finaliser: independent streams from (seed, index).
 std::uint64_t mix(std::uint64_t seed, std::uint64_t index) {

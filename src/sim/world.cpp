@@ -15,7 +15,6 @@ namespace plumb::sim {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 std::string lower(const std::string& s) {

@@ -16,11 +16,11 @@
 namespace {
 
 using plumb::CalibrationTuple;
+using plumb::kPi;
 using plumb::OdometryLaserParams;
 using plumb::Pose2;
 using plumb::Status;
 
-constexpr double kPi = 3.14159265358979323846;
 
 const OdometryLaserParams kTruth{0.0205, 0.0208, 0.088, Pose2{0.031, -0.012, -1.52}};
 

@@ -12,7 +12,6 @@
 namespace plumb {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 Vector3d random_unit(Rng& rng) {
   Vector3d v(rng.normal(), rng.normal(), rng.normal());

@@ -10,7 +10,6 @@
 namespace plumb {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 Pose2 random_pose(Rng& rng) {
   return {rng.uniform(-10, 10), rng.uniform(-10, 10), rng.uniform(-kPi, kPi)};

@@ -18,7 +18,6 @@
 namespace plumb::eval {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // The number after "key": in a flat JSON object (evo's stats.json); NaN when absent.
 double json_number(const std::string& text, const std::string& key) {

@@ -17,7 +17,6 @@
 namespace plumb {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 Vector3d normal3(Rng& rng, double sigma = 1.0) {
   const double x = rng.normal(), y = rng.normal(), z = rng.normal();

@@ -13,7 +13,6 @@
 namespace plumb::io {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 std::string error_of(const std::string& text) {
   try {

@@ -17,7 +17,6 @@
 namespace plumb {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
 constexpr double kHeight = 0.9;  // sensor above the road [m]
 

@@ -18,7 +18,6 @@
 namespace plumb {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 Eigen::Isometry3d read_relative(const std::string& path) {
   std::ifstream in(path);

@@ -21,7 +21,6 @@
 namespace plumb {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
 
 struct Box {

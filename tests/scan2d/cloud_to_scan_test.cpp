@@ -16,7 +16,6 @@
 namespace plumb {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 PointCloud cloud_of(std::initializer_list<Vector3f> pts) {
   PointCloud c;

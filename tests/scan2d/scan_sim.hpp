@@ -18,7 +18,7 @@
 
 namespace plumb::test {
 
-constexpr double kPi = 3.14159265358979323846;
+using plumb::kPi;
 
 struct Segment {
   Vector2d a, b;

@@ -16,7 +16,6 @@
 namespace plumb {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
 
 double angle_between_lines(const Vector3d& a, const Vector3d& b) {

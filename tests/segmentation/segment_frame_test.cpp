@@ -18,7 +18,6 @@
 namespace plumb {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
 
 double angle_to_z(const Vector3d& n) { return std::acos(std::min(1.0, std::abs(n.normalized().z()))); }

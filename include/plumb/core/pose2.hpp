@@ -10,7 +10,6 @@ namespace plumb {
 
 /// @brief Wrap an angle to (-pi, pi] [rad]. An angle already in range comes back unchanged (exactly).
 inline double wrap_angle(double a) {
-  constexpr double kPi = 3.14159265358979323846;
   if (a > -kPi && a <= kPi) return a;
   a = std::fmod(a + kPi, 2.0 * kPi);
   if (a <= 0.0) a += 2.0 * kPi;

@@ -14,4 +14,7 @@ using Vector6d = Eigen::Matrix<double, 6, 1>;
 using Matrix3d = Eigen::Matrix3d;
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 
+/// @brief pi, for every module (double precision).
+constexpr double kPi = 3.14159265358979323846;
+
 }  // namespace plumb

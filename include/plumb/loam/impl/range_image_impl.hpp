@@ -13,7 +13,6 @@ namespace plumb {
 
 namespace loam_detail {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kDegToRad = kPi / 180.0;
 
 // Range of a point in [min_range, max_range] with finite coordinates, else a negative value.

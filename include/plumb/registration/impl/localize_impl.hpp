@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "plumb/core/clock.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/features/normals.hpp"
 #include "plumb/filters/voxel_grid.hpp"
@@ -12,10 +13,6 @@
 namespace plumb {
 
 namespace detail {
-
-inline double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 inline void check_localize_settings(const LocalizeSettings& s) {
   PLUMB_CHECK(std::isfinite(s.voxel_size) && s.voxel_size > 0.0,
@@ -148,7 +145,7 @@ inline LocalizeTarget prepare_localize_target(const PointCloud& target, const Lo
     detail::localize_normals(out.fine, settings, settings.fine_voxel_size, settings.use_target_normals, origin);
   }
   if (out.fine.size() >= 3) out.fine_tree = std::make_unique<KdTree3f>(out.fine.points);
-  out.seconds = detail::seconds_since(t0);
+  out.seconds = seconds_since(t0);
   return out;
 }
 
@@ -164,7 +161,7 @@ inline LocalizeResult localize_coarse_to_fine(const PointCloud& source, const Lo
   const std::vector<FpfhSignature> features = detail::localize_fpfh(coarse, settings);
   out.num_source_coarse = coarse.size();
   out.num_target_coarse = target.coarse.size();
-  out.seconds_prepare = detail::seconds_since(t0);
+  out.seconds_prepare = seconds_since(t0);
   if (coarse.size() < settings.sac_ia.num_samples || !target.coarse_tree || !target.fine_tree) {
     out.status = Status::kInsufficientData;
     return out;
@@ -178,11 +175,11 @@ inline LocalizeResult localize_coarse_to_fine(const PointCloud& source, const Lo
   auto attempt = [&](const SacIaSettings& sac, SacIaResult& coarse_out, IcpResult& fine_out) {
     auto t = std::chrono::steady_clock::now();
     coarse_out = align_sac_ia(coarse, features, target.coarse, target.features, *target.coarse_tree, sac);
-    out.seconds_coarse += detail::seconds_since(t);
+    out.seconds_coarse += seconds_since(t);
     if (coarse_out.status == Status::kInsufficientData) return false;
     t = std::chrono::steady_clock::now();
     fine_out = detail::localize_fine_stage(fine, target, coarse_out.T_target_source, settings);
-    out.seconds_fine += detail::seconds_since(t);
+    out.seconds_fine += seconds_since(t);
     return true;
   };
   if (!attempt(ss, out.coarse, out.fine)) {
