@@ -3,12 +3,12 @@
 # README command 2 (and CI): install what is missing; the layering and file-length check; release
 # build with -Werror (library, CLI, examples, benchmarks) and the find_package consumer; the demo's
 # steps of README command 1 on that build; every test built and run under ASan+UBSan; each fuzzer
-# for PLUMB_FUZZ_SECONDS (30), one per core at a time.
+# for PLUMB_FUZZ_SECONDS (20), one per core at a time.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root="$(pwd)"
 jobs="$(nproc)"
-fuzz_seconds="${PLUMB_FUZZ_SECONDS:-30}"
+fuzz_seconds="${PLUMB_FUZZ_SECONDS:-20}"
 
 bash scripts/setup.sh --fuzz
 

@@ -92,8 +92,20 @@ double yaw_of(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), 
 
 struct Tally {
   int found = 0;
+  int tried = 0;
   std::vector<double> errors, seconds;
+  /// `found` of all 20 starts scaled to the starts tried (see kStartStride).
+  int scaled(int of_twenty) const { return of_twenty * tried / 20; }
 };
+
+// Sanitizer builds run about ten times slower: they try every other start, the counts asserted
+// are scaled to the starts tried, and the median-error bounds (set over all 20) are left to
+// release builds, which try all 20.
+#if defined(__SANITIZE_ADDRESS__)
+constexpr std::size_t kStartStride = 2;
+#else
+constexpr std::size_t kStartStride = 1;
+#endif
 
 /// Localize every start (with a hint of `hint_radius` around a point up to `hint_offset` from the
 /// truth when hint_radius > 0); every kOk pose must be in the right place (15 cm, 1 deg: no other
@@ -102,8 +114,9 @@ Tally localize_all(const std::string& name, const Building& b, const BimLocalize
                    double hint_radius) {
   Tally t;
   plumb::Rng rng(7);
-  for (std::size_t k = 0; k < b.starts.size(); ++k) {
+  for (std::size_t k = 0; k < b.starts.size(); k += kStartStride) {
     const Start& st = b.starts[k];
+    ++t.tried;
     std::optional<Eigen::Vector2d> hint;
     if (hint_radius > 0.0) {
       const double a = rng.uniform(-M_PI, M_PI);
@@ -143,13 +156,13 @@ TEST_P(BimLocalizerBuildingTest, RandomStartsAreFoundOrRejectedNeverWrong) {
   }
   const Building& b = building(c.name);
   const Tally plain = localize_all(c.name, b, *b.localizer, 0.0, 0.0);
-  EXPECT_GE(plain.found, c.min_found);
-  if (plain.found > 0) {
+  EXPECT_GE(plain.found, plain.scaled(c.min_found));
+  if (plain.found > 0 && kStartStride == 1) {  // the median bound holds over all 20 starts
     EXPECT_LT(plain.errors[plain.errors.size() / 2], c.max_median);  // as-built deviations are 1 cm / 0.2 deg
   }
   if (c.min_found_hinted > 0) {
     const Tally hinted = localize_all(c.name, b, *b.localizer, 1.0, 2.5);
-    EXPECT_GE(hinted.found, c.min_found_hinted);
+    EXPECT_GE(hinted.found, hinted.scaled(c.min_found_hinted));
   }
 }
 
@@ -171,7 +184,7 @@ TEST(BimLocalizerTest, AModelWithoutFloorsLocalizesTheStartsOfTheFullBuilding) {
   const plumb::bim::BimMesh bare = plumb::test::without_types(*b.mesh, {"IfcSlab", "IfcCovering"});
   const BimLocalizer localizer(bare, plumb::sample_bim_cloud(bare, 0.05));
   const Tally t = localize_all("AC20-FZK-Haus without floors", b, localizer, 0.0, 0.0);
-  EXPECT_GE(t.found, 17);
+  EXPECT_GE(t.found, t.scaled(17));
   if (t.found > 0) {
     EXPECT_LT(t.errors[t.errors.size() / 2], 0.02);
   }
@@ -192,7 +205,7 @@ TEST(BimLocalizerTest, AModelWithRoomsButNoFloorsLocalizesTheStartsOfTheFullBuil
   ASSERT_EQ(plumb::bim::floor_plan(bare).floor_source, plumb::bim::FloorSource::kSpaces);
   const BimLocalizer localizer(bare, plumb::sample_bim_cloud(bare, 0.05));
   const Tally t = localize_all("AC20-FZK-Haus with rooms, without floors", b, localizer, 0.0, 0.0);
-  EXPECT_GE(t.found, 17);
+  EXPECT_GE(t.found, t.scaled(17));
   if (t.found > 0) {
     EXPECT_LT(t.errors[t.errors.size() / 2], 0.02);
   }
@@ -295,7 +308,8 @@ TEST(BimLocalizerTest, FramesFromAnotherBuildingAreRejected) {
   const Building& flats = building("duplex");
   int confident = 0;
   for (const auto& [from, into] : {std::pair{&office, &house}, std::pair{&house, &flats}, std::pair{&flats, &office}}) {
-    for (std::size_t k = 0; k < from->starts.size(); k += 3) {  // 7 frames per pair: keeps the suite short
+    // 7 frames per pair keep the suite short (4 under sanitizers).
+    for (std::size_t k = 0; k < from->starts.size(); k += 3 * kStartStride) {
       const Start& st = from->starts[k];
       const BimLocalization r = into->localizer->localize(st.frame, from->T_base_lidar);
       confident += r.status == Status::kOk ? 1 : 0;
