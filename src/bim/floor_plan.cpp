@@ -87,11 +87,6 @@ const std::string& type_of(const BimMesh& mesh, std::int32_t element) {
   return mesh.elements[static_cast<std::size_t>(element)].type;
 }
 
-bool is_ignored(const BimMesh& mesh, std::int32_t element, const std::vector<std::string>& ignored) {
-  const std::string& type = type_of(mesh, element);
-  return !type.empty() && std::find(ignored.begin(), ignored.end(), type) != ignored.end();
-}
-
 /// Marks the cells whose centre lies inside the closed surface of one element at height z
 /// (even-odd rule on the element's cross-section, row by row). Rows with an odd number of
 /// crossings (an open surface) are left alone.
@@ -137,6 +132,7 @@ void fill_cross_section(const OccupancyGrid& g, const BimMesh& mesh, const BimEl
   }
 }
 
+/// True when the element's IFC type is one of `types`.
 bool has_type(const BimMesh& mesh, std::int32_t element, const std::vector<std::string>& types) {
   const std::string& type = type_of(mesh, element);
   return !type.empty() && std::find(types.begin(), types.end(), type) != types.end();
@@ -262,7 +258,7 @@ OccupancyGrid slice_storey(const BimMesh& mesh, int storey, const OccupancyGridS
         rasterize_triangle(g, a.head<2>(), b.head<2>(), c.head<2>(), false, [&](std::size_t i) { space[i] = 1; });
       }
     }
-    if (is_ignored(mesh, element, s.ignored_types)) {
+    if (has_type(mesh, element, s.ignored_types)) {
       if (is_door(mesh, element) && zmax >= slice_lo && zmin <= slice_hi) {
         rasterize_triangle(g, a.head<2>(), b.head<2>(), c.head<2>(), true, [&](std::size_t i) { door[i] = 1; });
       }
@@ -295,7 +291,7 @@ OccupancyGrid slice_storey(const BimMesh& mesh, int storey, const OccupancyGridS
   std::vector<double> xs;
   for (std::size_t e = 0; e < mesh.elements.size(); ++e) {
     const BimElement& el = mesh.elements[e];
-    if (el.num_triangles == 0 || is_ignored(mesh, static_cast<std::int32_t>(e), s.ignored_types)) continue;
+    if (el.num_triangles == 0 || has_type(mesh, static_cast<std::int32_t>(e), s.ignored_types)) continue;
     for (double z : {slice_lo + 0.01, 0.5 * (slice_lo + slice_hi), slice_hi - 0.01}) {
       fill_cross_section(g, mesh, el, z, segments, xs, [&](std::size_t i) { occupied[i] = 1; });
     }

@@ -128,6 +128,8 @@ ScanOdometryStep ScanOdometry::add(const LaserScan& scan, const Pose2& odom_pose
       // Starts that do not use this step's odometry: the previous step repeated, and standing still.
       const Pose2 T_kf_prev = T_world_kf.ominus().oplus(T_world_base_prev.oplus(l));
       const Pose2 starts[2] = {T_kf_prev.oplus(laser_motion(last_motion_, l)), T_kf_prev};
+      // What the prior's own match explained (step.match is overwritten by an accepted retry).
+      const double prior_valid_fraction = m.num_points == 0 ? 0.0 : m.valid_fraction;
       double best_mse = std::numeric_limits<double>::infinity();
       for (const Pose2& start : starts) {
         const Pose2 d = T_kf_cur_guess.ominus().oplus(start);
@@ -139,7 +141,7 @@ ScanOdometryStep ScanOdometry::add(const LaserScan& scan, const Pose2& odom_pose
         // degenerate match from a guessed start is the guess, not a measurement. And a match that
         // pairs fewer of the scan's points than the prior's own match did has merely found a
         // smaller part of the scan that fits (a corridor's walls a metre back): the prior stands.
-        const bool explains_as_much = m.num_points == 0 || r.valid_fraction >= m.valid_fraction;
+        const bool explains_as_much = r.valid_fraction >= prior_valid_fraction;
         if (passes_gate(r, start) && !r.degenerate && explains_as_much && r.mse < best_mse) {
           best_mse = r.mse;
           T_kf_cur = r.T_ref_cur;

@@ -234,9 +234,8 @@ TEST(ScanOdometryTest, APriorFreeMatchAlongACorridorIsNotTaken) {
   EXPECT_NEAR(st.T_world_base.theta, slipped.theta, 1e-6);
 }
 
-// With the fusion on, a well-conditioned match is kept (the scan dominates where it sees), and a
-// prior that disagrees with it beyond both budgets does not pull it.
-TEST(ScanOdometryTest, FusionKeepsAWellConditionedMatchAndIgnoresAWrongPrior) {
+// With the fusion on, a well-conditioned match is kept: the scan dominates where it sees.
+TEST(ScanOdometryTest, FusionKeepsAWellConditionedMatch) {
   const auto world = test::room_world();
   auto scan_at = [&](const Pose2& base) { return test::cast_scan(world, base, 361, kPi); };
   const Pose2 o0{0, 0, 0}, o1{0.2, 0.05, 0.05};
@@ -254,6 +253,36 @@ TEST(ScanOdometryTest, FusionKeepsAWellConditionedMatchAndIgnoresAWrongPrior) {
     EXPECT_NEAR(sb.T_world_base.theta, o1.theta, 0.001);
     EXPECT_NEAR(sb.T_world_base.x, sa.T_world_base.x, 0.003);
   }
+}
+
+// Fusion weighs match and prior by their covariances: with the match's covariance inflated to the
+// prior's size, a prior 1 cm off moves the estimate about halfway, while one 25 cm off (beyond the
+// chi^2 budget of both) is ignored, unless the gate is opened, when it pulls as hard.
+TEST(ScanOdometryTest, FusionAveragesAConsistentPriorAndIgnoresAnInconsistentOne) {
+  const auto world = test::room_world();
+  auto scan_at = [&](const Pose2& base) { return test::cast_scan(world, base, 361, kPi); };
+  const Pose2 o0{0, 0, 0}, o1{0.2, 0.05, 0.05};
+  // The match's own x variance on this scene, and the prior's from the odometry model.
+  ScanOdometry probe;
+  probe.add(scan_at(o0), o0);
+  const double match_var = probe.add(scan_at(o1), o1).match.covariance(0, 0);
+  ASSERT_GT(match_var, 0.0);
+  const ScanOdometrySettings defaults;
+  const double prior_sd = defaults.odometry_sigma_xy_min + defaults.odometry_sigma_xy_per_m * 0.2;
+  auto run = [&](double prior_error_x, double max_chi2) {
+    ScanOdometrySettings s;
+    s.fuse_prior = true;
+    s.match_covariance_scale = prior_sd * prior_sd / match_var;  // match and prior equally trusted in x
+    s.fusion_max_chi2 = max_chi2;
+    ScanOdometry so(s);
+    so.add(scan_at(o0), o0);
+    return so.add(scan_at(o1), o1.oplus(Pose2{prior_error_x, 0.0, 0.0})).T_world_base.x - o1.x;
+  };
+  const double consistent = run(0.01, 7.81);
+  EXPECT_GT(consistent, 0.003);  // pulled toward the prior ...
+  EXPECT_LT(consistent, 0.007);  // ... about halfway
+  EXPECT_NEAR(run(0.25, 7.81), 0.0, 0.003);  // beyond the budget: the match stands
+  EXPECT_GT(run(0.25, std::numeric_limits<double>::infinity()), 0.05);  // without the gate it would pull
 }
 
 // The corridor log (1 deg beams, long corridors): fusing the wheel prior per direction lowers the
