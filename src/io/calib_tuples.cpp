@@ -13,11 +13,10 @@
 
 #include "plumb/io/input_file.hpp"
 #include "plumb/core/error.hpp"
+#include "text_tokens.hpp"
 
 namespace plumb::io {
 namespace {
-
-bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
 
 /// A parser for one line holding flat JSON objects of numbers, strings, literals and arrays. Several
 /// objects may share a line (Censi's l90.tuple concatenates runs without a newline between them).
@@ -82,7 +81,7 @@ class LineParser {
     return std::string("'") + c + "'";
   }
   void skip_space() {
-    while (pos_ < s_.size() && is_space(s_[pos_])) ++pos_;
+    while (pos_ < s_.size() && detail::is_space(s_[pos_])) ++pos_;
   }
   char peek() const { return pos_ < s_.size() ? s_[pos_] : '\0'; }
   char next() { return pos_ < s_.size() ? s_[pos_++] : '\0'; }
@@ -199,9 +198,7 @@ std::vector<CalibrationTuple> parse_calib_tuples(const std::string& text, const 
     std::size_t end = text.find('\n', start);
     if (end == std::string::npos) end = text.size();
     ++line_number;
-    std::string_view line(text.data() + start, end - start);
-    while (!line.empty() && is_space(line.front())) line.remove_prefix(1);
-    while (!line.empty() && is_space(line.back())) line.remove_suffix(1);
+    const std::string_view line = detail::trim(std::string_view(text.data() + start, end - start));
     if (!line.empty() && line.front() != '#') {
       LineParser parser(line, name, line_number);
       do {

@@ -11,10 +11,10 @@
 
 #include "plumb/core/error.hpp"
 #include "detail_cloud_io.hpp"
+#include "text_tokens.hpp"
 
 namespace plumb::io {
 namespace {
-
 
 /// Largest beam or remission count a message may declare.
 constexpr double kMaxCount = 1e6;
@@ -23,8 +23,6 @@ constexpr double kMaxCount = 1e6;
 /// memory than the largest valid message (each field is a 16-byte view of the text).
 constexpr std::size_t kMaxFields = 2 * static_cast<std::size_t>(kMaxCount) + 24;
 
-bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
-
 /// Splits one line into white-space separated tokens and converts them, with the file and line
 /// in every error.
 class Fields {
@@ -32,16 +30,10 @@ class Fields {
   Fields(std::string_view line, const std::string& name, std::size_t line_number)
       : name_(name), line_(line_number) {
     std::size_t i = 0;
-    while (i < line.size()) {
-      while (i < line.size() && is_space(line[i])) ++i;
-      const std::size_t start = i;
-      while (i < line.size() && !is_space(line[i])) ++i;
-      if (i > start) {
-        PLUMB_CHECK(tokens_.size() < kMaxFields, name_ << ":" << line_ << ": " << tokens_.front()
-                                                       << ": more than " << kMaxFields
-                                                       << " fields, more than any CARMEN message has");
-        tokens_.push_back(line.substr(start, i - start));
-      }
+    for (std::string_view token = detail::next_token(line, i); !token.empty(); token = detail::next_token(line, i)) {
+      PLUMB_CHECK(tokens_.size() < kMaxFields, name_ << ":" << line_ << ": " << tokens_.front() << ": more than "
+                                                     << kMaxFields << " fields, more than any CARMEN message has");
+      tokens_.push_back(token);
     }
   }
 
@@ -158,11 +150,10 @@ void parse_robotlaser(const Fields& f, const CarmenReadSettings& settings, Carme
 
 void parse_line(std::string_view line, std::size_t line_number, const std::string& name,
                 const CarmenReadSettings& settings, CarmenLog& log) {
-  while (!line.empty() && is_space(line.front())) line.remove_prefix(1);
+  line = detail::trim(line);
   if (line.empty() || line.front() == '#') return;
   std::size_t type_end = 0;
-  while (type_end < line.size() && !is_space(line[type_end])) ++type_end;
-  const std::string_view type = line.substr(0, type_end);
+  const std::string_view type = detail::next_token(line, type_end);
   const bool laser_message = type == "FLASER" || type.substr(0, 8) == "RAWLASER" || type == "ROBOTLASER1";
   if (!laser_message && type != "ODOM" && type != "PARAM") {
     ++log.num_skipped;  // NEFF, RLASER, SYNC, TRUEPOS, ...: not split, whatever their length

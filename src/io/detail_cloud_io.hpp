@@ -88,29 +88,6 @@ struct LineCursor {
   std::size_t offset() const { return static_cast<std::size_t>(pos - begin); }
 };
 
-inline bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f'; }
-
-/// Split a line into whitespace-separated tokens.
-inline std::vector<std::string_view> split_tokens(std::string_view line) {
-  std::vector<std::string_view> out;
-  std::size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && is_space(line[i])) ++i;
-    const std::size_t start = i;
-    while (i < line.size() && !is_space(line[i])) ++i;
-    if (i > start) out.push_back(line.substr(start, i - start));
-  }
-  return out;
-}
-
-/// Next whitespace-separated token of `line` starting at `i` (advanced); empty at end.
-inline std::string_view next_token(std::string_view line, std::size_t& i) {
-  while (i < line.size() && is_space(line[i])) ++i;
-  const std::size_t start = i;
-  while (i < line.size() && !is_space(line[i])) ++i;
-  return line.substr(start, i - start);
-}
-
 /// Parse a whole token as T (integer or floating point); false when it is not exactly a number.
 /// Accepts a leading '+' and, for floating point, nan / inf in any case.
 template <class T>

@@ -11,13 +11,14 @@
 #include <sstream>
 #include <string_view>
 #include <system_error>
-#include <unordered_set>
 #include <utility>
 
 #include "plumb/io/input_file.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/io/trajectory.hpp"
 #include "plumb/io/wheel_encoders.hpp"
+#include "json_text.hpp"
+#include "text_tokens.hpp"
 
 namespace plumb::io {
 namespace {
@@ -36,259 +37,16 @@ std::string join_path(const std::string& dir, const std::string& name) {
   return (fs::path(dir) / name).string();
 }
 
-// ---- a small strict JSON reader (RFC 8259 subset: no \u escapes beyond ASCII) ---------------------
+// ---- meta.json values ----------------------------------------------------------------------------
 
-struct JsonValue {
-  enum class Kind { kNull, kBool, kNumber, kString, kArray, kObject };
-  Kind kind = Kind::kNull;
-  bool boolean = false;
-  double number = 0.0;
-  std::string string;
-  std::vector<JsonValue> array;
-  std::vector<std::pair<std::string, JsonValue>> object;
-  int line = 1, column = 1;  // where the value starts
-
-  const JsonValue* find(const std::string& key) const {
-    for (const auto& [k, v] : object) {
-      if (k == key) return &v;
-    }
-    return nullptr;
-  }
-};
-
-class JsonParser {
- public:
-  JsonParser(const std::string& text, const std::string& name) : text_(text), name_(name) {}
-
-  JsonValue parse_document() {
-    skip_space();
-    JsonValue v = parse_value(0);
-    skip_space();
-    if (pos_ != text_.size()) fail("unexpected text after the JSON value");
-    return v;
-  }
-
-  [[noreturn]] void fail(const std::string& message) const {
-    PLUMB_THROW(name_ << ':' << line_ << ':' << column_ << ": " << message);
-  }
-
- private:
-  char peek() const { return pos_ < text_.size() ? text_[pos_] : '\0'; }
-  bool at_end() const { return pos_ >= text_.size(); }
-  void advance() {
-    if (text_[pos_] == '\n') {
-      ++line_;
-      column_ = 1;
-    } else {
-      ++column_;
-    }
-    ++pos_;
-  }
-  void skip_space() {
-    while (!at_end() && (peek() == ' ' || peek() == '\t' || peek() == '\r' || peek() == '\n')) advance();
-  }
-  void expect(char c) {
-    if (at_end() || peek() != c) fail(std::string("expected '") + c + "'");
-    advance();
-  }
-  void expect_word(const char* word) {
-    for (const char* p = word; *p != '\0'; ++p) {
-      if (at_end() || peek() != *p) fail(std::string("invalid literal, expected '") + word + "'");
-      advance();
-    }
-  }
-
-  JsonValue parse_value(int depth) {
-    if (depth > 64) fail("nesting too deep");
-    JsonValue v;
-    v.line = line_;
-    v.column = column_;
-    if (at_end()) fail("unexpected end of file");
-    const char c = peek();
-    if (c == '{') {
-      v.kind = JsonValue::Kind::kObject;
-      advance();
-      skip_space();
-      if (peek() == '}') {
-        advance();
-        return v;
-      }
-      // A set, not a scan of the keys so far: that scan made an object of n keys cost n^2 / 2
-      // string comparisons (minutes for a 1 MB file of short keys).
-      std::unordered_set<std::string> keys;
-      for (;;) {
-        skip_space();
-        if (peek() != '"') fail("expected a string key");
-        std::string key = parse_string();
-        if (!keys.insert(key).second) fail("duplicate key \"" + key + "\"");
-        skip_space();
-        expect(':');
-        skip_space();
-        v.object.emplace_back(std::move(key), parse_value(depth + 1));
-        skip_space();
-        if (peek() == ',') {
-          advance();
-          continue;
-        }
-        expect('}');
-        return v;
-      }
-    }
-    if (c == '[') {
-      v.kind = JsonValue::Kind::kArray;
-      advance();
-      skip_space();
-      if (peek() == ']') {
-        advance();
-        return v;
-      }
-      for (;;) {
-        skip_space();
-        v.array.push_back(parse_value(depth + 1));
-        skip_space();
-        if (peek() == ',') {
-          advance();
-          continue;
-        }
-        expect(']');
-        return v;
-      }
-    }
-    if (c == '"') {
-      v.kind = JsonValue::Kind::kString;
-      v.string = parse_string();
-      return v;
-    }
-    if (c == 't') {
-      expect_word("true");
-      v.kind = JsonValue::Kind::kBool;
-      v.boolean = true;
-      return v;
-    }
-    if (c == 'f') {
-      expect_word("false");
-      v.kind = JsonValue::Kind::kBool;
-      return v;
-    }
-    if (c == 'n') {
-      expect_word("null");
-      return v;
-    }
-    if (c == '-' || (c >= '0' && c <= '9')) {
-      v.kind = JsonValue::Kind::kNumber;
-      v.number = parse_number();
-      return v;
-    }
-    fail(std::string("unexpected character '") + c + "'");
-  }
-
-  std::string parse_string() {
-    expect('"');
-    std::string out;
-    for (;;) {
-      if (at_end()) fail("unterminated string");
-      const char c = peek();
-      if (c == '"') {
-        advance();
-        return out;
-      }
-      if (static_cast<unsigned char>(c) < 0x20) fail("control character in string");
-      if (c == '\\') {
-        advance();
-        if (at_end()) fail("unterminated string");
-        const char e = peek();
-        switch (e) {
-          case '"': out += '"'; break;
-          case '\\': out += '\\'; break;
-          case '/': out += '/'; break;
-          case 'b': out += '\b'; break;
-          case 'f': out += '\f'; break;
-          case 'n': out += '\n'; break;
-          case 'r': out += '\r'; break;
-          case 't': out += '\t'; break;
-          case 'u': {
-            unsigned code = 0;
-            for (int k = 0; k < 4; ++k) {
-              advance();
-              const char h = peek();
-              code <<= 4;
-              if (h >= '0' && h <= '9') code |= static_cast<unsigned>(h - '0');
-              else if (h >= 'a' && h <= 'f') code |= static_cast<unsigned>(h - 'a' + 10);
-              else if (h >= 'A' && h <= 'F') code |= static_cast<unsigned>(h - 'A' + 10);
-              else fail("bad \\u escape");
-            }
-            if (code >= 0x80) fail("non-ASCII \\u escape not supported");
-            out += static_cast<char>(code);
-            break;
-          }
-          default: fail(std::string("bad escape '\\") + e + "'");
-        }
-        advance();
-        continue;
-      }
-      out += c;
-      advance();
-    }
-  }
-
-  double parse_number() {
-    const std::size_t begin = pos_;
-    if (peek() == '-') advance();
-    if (!(peek() >= '0' && peek() <= '9')) fail("bad number");
-    while (peek() >= '0' && peek() <= '9') advance();
-    if (peek() == '.') {
-      advance();
-      if (!(peek() >= '0' && peek() <= '9')) fail("bad number");
-      while (peek() >= '0' && peek() <= '9') advance();
-    }
-    if (peek() == 'e' || peek() == 'E') {
-      advance();
-      if (peek() == '+' || peek() == '-') advance();
-      if (!(peek() >= '0' && peek() <= '9')) fail("bad number");
-      while (peek() >= '0' && peek() <= '9') advance();
-    }
-    double value = 0.0;
-    const auto result = std::from_chars(text_.data() + begin, text_.data() + pos_, value);
-    if (result.ec == std::errc::result_out_of_range) {
-      // Beyond a double (1e999) or below its smallest (1e-999): kept as strtod rounds it (inf or
-      // 0), so that get_number() can refuse an infinity naming the key it belongs to.
-      value = std::strtod(std::string(text_, begin, pos_ - begin).c_str(), nullptr);
-    } else if (result.ec != std::errc()) {
-      fail("bad number");
-    }
-    return value;
-  }
-
-  const std::string& text_;
-  const std::string& name_;
-  std::size_t pos_ = 0;
-  int line_ = 1, column_ = 1;
-};
-
-[[noreturn]] void fail_at(const std::string& name, const JsonValue& v, const std::string& message) {
-  PLUMB_THROW(name << ':' << v.line << ':' << v.column << ": " << message);
-}
-
-double get_number(const std::string& name, const JsonValue& v, const char* key) {
-  if (v.kind != JsonValue::Kind::kNumber) fail_at(name, v, std::string("\"") + key + "\" must be a number");
-  if (!std::isfinite(v.number)) fail_at(name, v, std::string("\"") + key + "\" must be a finite number");
-  return v.number;
-}
-
-std::string get_string(const std::string& name, const JsonValue& v, const char* key) {
-  if (v.kind != JsonValue::Kind::kString) fail_at(name, v, std::string("\"") + key + "\" must be a string");
-  return v.string;
-}
-
-std::vector<double> get_numbers(const std::string& name, const JsonValue& v, const char* key) {
-  if (v.kind != JsonValue::Kind::kArray) fail_at(name, v, std::string("\"") + key + "\" must be an array of numbers");
-  std::vector<double> out;
-  for (const JsonValue& e : v.array) out.push_back(get_number(name, e, key));
-  return out;
-}
+using detail::fail_at;
+using detail::json_number;
+using detail::json_numbers;
+using detail::json_string;
+using detail::JsonValue;
 
 Eigen::Isometry3d get_transform(const std::string& name, const JsonValue& v, const char* key) {
-  const std::vector<double> m = get_numbers(name, v, key);
+  const std::vector<double> m = json_numbers(name, v, key);
   if (m.size() != 16) {
     fail_at(name, v, std::string("\"") + key + "\" must hold 16 numbers (4x4 row-major), got " +
                          std::to_string(m.size()));
@@ -323,48 +81,10 @@ void append_transform(std::string& out, const Eigen::Isometry3d& T) {
   out += ']';
 }
 
-void append_string(std::string& out, const std::string& s) {
-  out += '"';
-  for (char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (c == '\n') {
-      out += "\\n";
-    } else if (c == '\t') {
-      out += "\\t";
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof(buf), "\\u%04x", static_cast<unsigned>(c));
-      out += buf;
-    } else {
-      out += c;
-    }
-  }
-  out += '"';
-}
-
 // ---- CSV -----------------------------------------------------------------------------------------
 
-bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r'; }
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && is_space(s.front())) s.remove_prefix(1);
-  while (!s.empty() && is_space(s.back())) s.remove_suffix(1);
-  return s;
-}
-
-std::vector<std::string_view> split_commas(std::string_view line) {
-  std::vector<std::string_view> fields;
-  std::size_t start = 0;
-  for (;;) {
-    const std::size_t comma = line.find(',', start);
-    fields.push_back(trim(line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start)));
-    if (comma == std::string_view::npos) break;
-    start = comma + 1;
-  }
-  return fields;
-}
+// Fields and lines are trimmed of blanks only (' ', '\t', '\r'): a '\f' or '\v' is not taken for one.
+std::string_view trim(std::string_view s) { return detail::trim(s, detail::is_blank); }
 
 std::string read_text(const std::string& path) {
   std::ifstream in = open_input_file(path);  // names a missing file or a directory as such
@@ -378,7 +98,7 @@ template <class Row>
 void read_csv(const std::string& text, const std::string& path, const char* header, Row&& row) {
   std::size_t line_number = 0;
   bool have_header = false;
-  const std::vector<std::string_view> expected = split_commas(header);
+  const std::vector<std::string_view> expected = detail::split_fields(header);
   std::size_t pos = 0;
   while (pos < text.size()) {
     std::size_t end = text.find('\n', pos);
@@ -387,7 +107,7 @@ void read_csv(const std::string& text, const std::string& path, const char* head
     pos = end + 1;
     ++line_number;
     if (line.empty() || line.front() == '#') continue;
-    std::vector<std::string_view> fields = split_commas(line);
+    std::vector<std::string_view> fields = detail::split_fields(line);
     if (!have_header) {
       PLUMB_CHECK(fields == expected, path << ':' << line_number << ": expected the header line '" << header
                                            << "', got '" << line << "'");
@@ -468,13 +188,13 @@ std::string frame_dump_meta_json(const FrameDumpMeta& meta) {
   std::string s = "{\n  \"format\": \"plumb-frame-dump\",\n  \"version\": 1,\n";
   s += "  \"units\": {\"length\": \"m\", \"angle\": \"rad\", \"time\": \"s\", \"point_time\": \"s since the frame stamp\"},\n";
   s += "  \"source\": ";
-  append_string(s, meta.source);
+  detail::append_json_string(s, meta.source);
   s += ",\n  \"model\": ";
-  append_string(s, meta.model);
+  detail::append_json_string(s, meta.model);
   s += ",\n  \"scenario\": ";
-  append_string(s, meta.scenario);
+  detail::append_json_string(s, meta.scenario);
   s += ",\n  \"lidar\": {\"name\": ";
-  append_string(s, meta.lidar.name);
+  detail::append_json_string(s, meta.lidar.name);
   s += ", \"rate_hz\": ";
   append_double(s, meta.lidar.rate_hz);
   s += ", \"columns\": " + std::to_string(meta.lidar.columns) + ", \"min_range\": ";
@@ -508,16 +228,15 @@ std::string frame_dump_meta_json(const FrameDumpMeta& meta) {
 }
 
 FrameDumpMeta parse_frame_dump_meta(const std::string& text, const std::string& name) {
-  JsonParser parser(text, name);
-  const JsonValue root = parser.parse_document();
+  const JsonValue root = detail::parse_json(text, name);
   if (root.kind != JsonValue::Kind::kObject) fail_at(name, root, "the document must be a JSON object");
   FrameDumpMeta meta;
   if (const JsonValue* v = root.find("format")) {
-    const std::string format = get_string(name, *v, "format");
+    const std::string format = json_string(name, *v, "format");
     if (format != "plumb-frame-dump") fail_at(name, *v, "\"format\" must be \"plumb-frame-dump\", got \"" + format + "\"");
   }
   if (const JsonValue* v = root.find("version")) {
-    const double version = get_number(name, *v, "version");
+    const double version = json_number(name, *v, "version");
     if (version != 1.0) fail_at(name, *v, "unsupported \"version\" (this reader knows version 1)");
   }
   const JsonValue* lidar_T = root.find("T_base_lidar");
@@ -526,7 +245,7 @@ FrameDumpMeta parse_frame_dump_meta(const std::string& text, const std::string& 
   if (const JsonValue* v = root.find("T_base_imu")) meta.T_base_imu = get_transform(name, *v, "T_base_imu");
   auto non_negative = [&](const char* key, double& out) {
     if (const JsonValue* v = root.find(key)) {
-      out = get_number(name, *v, key);
+      out = json_number(name, *v, key);
       if (out < 0.0) fail_at(name, *v, std::string("\"") + key + "\" must not be negative");
     }
   };
@@ -535,32 +254,34 @@ FrameDumpMeta parse_frame_dump_meta(const std::string& text, const std::string& 
   non_negative("axle", meta.axle);
   non_negative("imu_rate_hz", meta.imu_rate_hz);
   if (const JsonValue* v = root.find("origin_offset")) {
-    const std::vector<double> o = get_numbers(name, *v, "origin_offset");
+    const std::vector<double> o = json_numbers(name, *v, "origin_offset");
     if (o.size() != 3) fail_at(name, *v, "\"origin_offset\" must hold 3 numbers");
     meta.origin_offset = Vector3d(o[0], o[1], o[2]);
   }
-  if (const JsonValue* v = root.find("source")) meta.source = get_string(name, *v, "source");
-  if (const JsonValue* v = root.find("model")) meta.model = get_string(name, *v, "model");
-  if (const JsonValue* v = root.find("scenario")) meta.scenario = get_string(name, *v, "scenario");
+  if (const JsonValue* v = root.find("source")) meta.source = json_string(name, *v, "source");
+  if (const JsonValue* v = root.find("model")) meta.model = json_string(name, *v, "model");
+  if (const JsonValue* v = root.find("scenario")) meta.scenario = json_string(name, *v, "scenario");
   if (const JsonValue* l = root.find("lidar")) {
     if (l->kind != JsonValue::Kind::kObject) fail_at(name, *l, "\"lidar\" must be an object");
-    if (const JsonValue* v = l->find("name")) meta.lidar.name = get_string(name, *v, "name");
+    if (const JsonValue* v = l->find("name")) meta.lidar.name = json_string(name, *v, "name");
     if (const JsonValue* v = l->find("rate_hz")) {
       // 0 = unknown; otherwise a spinning LiDAR's rate. It sets the tolerances of `plumb run` / `lio`
       // (one LiDAR period), which a rate like 1e-9 Hz would make meaningless.
-      meta.lidar.rate_hz = get_number(name, *v, "rate_hz");
+      meta.lidar.rate_hz = json_number(name, *v, "rate_hz");
       if (meta.lidar.rate_hz != 0.0 && !(meta.lidar.rate_hz >= kMinLidarRateHz && meta.lidar.rate_hz <= kMaxLidarRateHz)) {
         fail_at(name, *v, "\"rate_hz\" must be 0 (unknown) or in [0.1, 1000] Hz");
       }
     }
     if (const JsonValue* v = l->find("columns")) {
-      const double c = get_number(name, *v, "columns");
+      const double c = json_number(name, *v, "columns");
       if (c < 0 || c != std::floor(c) || c > 1e7) fail_at(name, *v, "\"columns\" must be a non-negative integer");
       meta.lidar.columns = static_cast<int>(c);
     }
-    if (const JsonValue* v = l->find("min_range")) meta.lidar.min_range = get_number(name, *v, "min_range");
-    if (const JsonValue* v = l->find("max_range")) meta.lidar.max_range = get_number(name, *v, "max_range");
-    if (const JsonValue* v = l->find("elevations_rad")) meta.lidar.elevations_rad = get_numbers(name, *v, "elevations_rad");
+    if (const JsonValue* v = l->find("min_range")) meta.lidar.min_range = json_number(name, *v, "min_range");
+    if (const JsonValue* v = l->find("max_range")) meta.lidar.max_range = json_number(name, *v, "max_range");
+    if (const JsonValue* v = l->find("elevations_rad")) {
+      meta.lidar.elevations_rad = json_numbers(name, *v, "elevations_rad");
+    }
   }
   return meta;
 }

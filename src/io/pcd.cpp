@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "detail_cloud_io.hpp"
+#include "text_tokens.hpp"
 
 namespace plumb::io {
 namespace {
@@ -21,7 +22,7 @@ using cloud_detail::convert_value;
 using cloud_detail::LineCursor;
 using cloud_detail::load;
 using cloud_detail::parse_number;
-using cloud_detail::split_tokens;
+using detail::split_tokens;
 
 // Upper bound on COUNT per field; keeps record sizes far from overflow. Real files use <= 308 (FPFH
 // histograms are 33, VFH 308).
@@ -440,7 +441,7 @@ void read_ascii(const Header& h, const char* data, std::size_t size, const std::
     bool got_line = false;
     while (cur.next(line)) {
       std::size_t k = 0;
-      if (!cloud_detail::next_token(line, k).empty()) {
+      if (!detail::next_token(line, k).empty()) {
         got_line = true;
         break;
       }
@@ -456,7 +457,7 @@ void read_ascii(const Header& h, const char* data, std::size_t size, const std::
     std::size_t pos = 0;
     for (const Field& f : h.fields) {
       for (std::uint64_t c = 0; c < f.count; ++c) {
-        const std::string_view tok = cloud_detail::next_token(line, pos);
+        const std::string_view tok = detail::next_token(line, pos);
         if (tok.empty()) {
           PLUMB_THROW(name << ":" << cur.line << ": expected " << values_per_point << " values, line ends in field '"
                            << f.name << "'");
@@ -482,7 +483,7 @@ void read_ascii(const Header& h, const char* data, std::size_t size, const std::
         }
       }
     }
-    if (!cloud_detail::next_token(line, pos).empty()) {
+    if (!detail::next_token(line, pos).empty()) {
       PLUMB_THROW(name << ":" << cur.line << ": more than the " << values_per_point << " values FIELDS declares");
     }
     cloud.points.push_back(p);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "detail_cloud_io.hpp"
+#include "text_tokens.hpp"
 
 namespace plumb::io {
 namespace {
@@ -19,7 +20,7 @@ using cloud_detail::LineCursor;
 using cloud_detail::load;
 using cloud_detail::load_swapped;
 using cloud_detail::parse_number;
-using cloud_detail::split_tokens;
+using detail::split_tokens;
 
 enum class Format { kAscii, kBinaryLittleEndian, kBinaryBigEndian };
 enum class Scalar { kInt8, kUint8, kInt16, kUint16, kInt32, kUint32, kFloat32, kFloat64 };
@@ -318,12 +319,12 @@ struct TokenCursor {
   std::size_t line;
 
   std::string_view next() {
-    while (pos < end && cloud_detail::is_space(*pos)) {
+    while (pos < end && detail::is_space(*pos)) {
       if (*pos == '\n') ++line;
       ++pos;
     }
     const char* start = pos;
-    while (pos < end && !cloud_detail::is_space(*pos)) ++pos;
+    while (pos < end && !detail::is_space(*pos)) ++pos;
     return std::string_view(start, static_cast<std::size_t>(pos - start));
   }
 };

@@ -12,11 +12,10 @@
 
 #include "plumb/core/error.hpp"
 #include "plumb/io/input_file.hpp"
+#include "text_tokens.hpp"
 
 namespace plumb::io {
 namespace {
-
-bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
 
 /// One line of a text with its 1-based number, trimmed; comment and blank lines are skipped.
 class LineReader {
@@ -28,11 +27,9 @@ class LineReader {
     while (pos_ < text_.size()) {
       std::size_t end = text_.find('\n', pos_);
       if (end == std::string_view::npos) end = text_.size();
-      std::string_view view = text_.substr(pos_, end - pos_);
+      const std::string_view view = detail::trim(text_.substr(pos_, end - pos_));
       pos_ = end + 1;
       ++line_number_;
-      while (!view.empty() && is_space(view.front())) view.remove_prefix(1);
-      while (!view.empty() && is_space(view.back())) view.remove_suffix(1);
       if (view.empty() || view.front() == '#') continue;
       line = view;
       return true;
@@ -62,12 +59,9 @@ std::string read_text(const std::string& path) {
 std::vector<double> parse_fields(std::string_view line, const LineReader& reader) {
   std::vector<double> values;
   std::size_t pos = 0;
-  while (pos < line.size()) {
-    while (pos < line.size() && (is_space(line[pos]) || line[pos] == ',')) ++pos;
-    if (pos >= line.size()) break;
-    std::size_t end = pos;
-    while (end < line.size() && !is_space(line[end]) && line[end] != ',') ++end;
-    const std::string_view token = line.substr(pos, end - pos);
+  const auto separator = [](char c) { return detail::is_space(c) || c == ','; };
+  for (std::string_view token = detail::next_token(line, pos, separator); !token.empty();
+       token = detail::next_token(line, pos, separator)) {
     // from_chars does not take a leading '+'; accept it as strtod would.
     std::string_view digits = token;
     if (digits.size() > 1 && digits.front() == '+') digits.remove_prefix(1);
@@ -77,7 +71,6 @@ std::vector<double> parse_fields(std::string_view line, const LineReader& reader
                 reader.path() << ':' << reader.line_number() << ": field " << values.size() + 1
                               << " is not a finite number: '" << token << "'");
     values.push_back(value);
-    pos = end;
   }
   return values;
 }

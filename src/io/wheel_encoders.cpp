@@ -12,26 +12,13 @@
 
 #include "plumb/io/input_file.hpp"
 #include "plumb/core/error.hpp"
+#include "text_tokens.hpp"
 
 namespace plumb::io {
 namespace {
 
+/// Fields are separated by any run of these (a comma between spaces is one separator).
 bool is_separator(char c) { return c == ',' || c == ';' || c == ' ' || c == '\t' || c == '\r'; }
-
-/// Splits a line into fields at any run of separators (a comma between spaces is one separator).
-std::vector<std::string_view> split_fields(std::string_view line) {
-  std::vector<std::string_view> fields;
-  std::size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && is_separator(line[i])) ++i;
-    if (i >= line.size()) break;
-    std::size_t j = i;
-    while (j < line.size() && !is_separator(line[j])) ++j;
-    fields.push_back(line.substr(i, j - i));
-    i = j;
-  }
-  return fields;
-}
 
 std::optional<double> to_number(std::string_view s) {
   if (!s.empty() && s.front() == '+') s.remove_prefix(1);
@@ -58,7 +45,7 @@ std::vector<WheelEncoderReading> parse_wheel_encoders(const std::string& text, c
     const std::string_view line(text.data() + pos, end - pos);
     pos = end + 1;
     ++line_number;
-    const std::vector<std::string_view> fields = split_fields(line);
+    const std::vector<std::string_view> fields = detail::split_tokens(line, is_separator);
     if (fields.empty() || fields.front().front() == '#') continue;
     std::array<double, 3> v{};
     bool numeric = fields.size() >= 3;

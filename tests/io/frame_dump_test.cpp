@@ -304,5 +304,66 @@ TEST(FrameDumpTest, MetaJsonIsValidJsonWithTheDocumentedKeys) {
   EXPECT_EQ(m.axle, 0.5);
 }
 
+// Every meta.json error names the line and column (from 1, in bytes) where the offending value
+// starts, or for a syntax error the byte where the JSON lexer stopped.
+TEST(FrameDumpTest, MetaErrorsNameTheLineAndColumnOfTheValue) {
+  const std::string T = "\"T_base_lidar\": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]";
+  struct Case {
+    std::string json;
+    std::string expected;
+  };
+  const Case cases[] = {
+      {"{\n  " + T + ",\n  \"axle\": \"wide\"}", "m.json:3:11: \"axle\" must be a number"},
+      {"{\n  " + T + ",\n  \"lidar\": {\"name\": \"a\", \"name\": \"b\"}}", "m.json:3:26: duplicate key \"name\""},
+      {"{\n\t" + T + ",\n\t\"lidar\": {\"columns\": 1.5}}", "m.json:3:23: \"columns\" must be a non-negative integer"},
+      {"{\"T_base_lidar\": [1,0,0,1e999, 0,1,0,0, 0,0,1,0, 0,0,0,1]}", "m.json:1:25: \"T_base_lidar\" must be"},
+      {"{\n  " + T + ",\n  \"axle\": 0.5,,\n}", "m.json:3:15: "},
+      {"{" + T + ", \"model\": \"a\xff\"}", "m.json:1:67: "},
+      {"", "m.json:1:1: "},
+      {std::string(65, '[') + std::string(65, ']'), "m.json:1:65: nesting too deep"},
+  };
+  for (const Case& c : cases) {
+    const std::string msg = test::error_of([&] { parse_frame_dump_meta(c.json, "m.json"); });
+    EXPECT_EQ(msg.rfind(c.expected, 0), 0u) << c.json << " -> " << msg;
+  }
+}
+
+TEST(FrameDumpTest, MetaStringsAndNumbersReadAsJsonMeansThem) {
+  const std::string T = "\"T_base_lidar\": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]";
+  // \u escapes beyond ASCII, a surrogate pair included, are UTF-8 in the string; "-0" is -0.0.
+  const FrameDumpMeta m = parse_frame_dump_meta(
+      "{" + T + ", \"source\": \"caf\\u00e9 \\ud83d\\ude00\\t\", \"axle\": -0, \"imu_rate_hz\": 2e2}");
+  EXPECT_EQ(m.source, "caf\xc3\xa9 \xf0\x9f\x98\x80\t");
+  EXPECT_EQ(m.axle, 0.0);
+  EXPECT_TRUE(std::signbit(m.axle));
+  EXPECT_EQ(m.imu_rate_hz, 200.0);
+  // A string that is not UTF-8 is written with U+FFFD in its place, so the file still reads.
+  FrameDumpMeta w = some_meta();
+  w.model = "haus\xff.ifc";
+  w.scenario = std::string("a\0b\x01", 4);
+  const FrameDumpMeta back = parse_frame_dump_meta(frame_dump_meta_json(w));
+  EXPECT_EQ(back.model, "haus\xef\xbf\xbd.ifc");
+  EXPECT_EQ(back.scenario, w.scenario);
+}
+
+// The writer's shortest round-trip numbers read back bit for bit, whatever their magnitude.
+TEST(FrameDumpTest, MetaNumbersRoundTripBitForBit) {
+  Rng rng(11);
+  FrameDumpMeta meta = some_meta();
+  meta.lidar.elevations_rad = {0.0, -0.0, 5e-324, -2.2250738585072014e-308, 1.7976931348623157e308, 0.1, 1.0 / 3.0,
+                               9007199254740993.0, 123456789012345678901234.0};
+  for (int k = 0; k < 2000; ++k) {
+    meta.lidar.elevations_rad.push_back(rng.normal() * std::pow(10.0, rng.uniform(-300, 300)));
+  }
+  meta.axle = 0.1 + 0.2;
+  const FrameDumpMeta back = parse_frame_dump_meta(frame_dump_meta_json(meta));
+  ASSERT_EQ(back.lidar.elevations_rad.size(), meta.lidar.elevations_rad.size());
+  for (std::size_t i = 0; i < meta.lidar.elevations_rad.size(); ++i) {
+    const double a = meta.lidar.elevations_rad[i], b = back.lidar.elevations_rad[i];
+    EXPECT_TRUE(a == b && std::signbit(a) == std::signbit(b)) << i << ": " << a << " read back as " << b;
+  }
+  EXPECT_EQ(back.axle, meta.axle);
+}
+
 }  // namespace
 }  // namespace plumb::io
