@@ -16,114 +16,15 @@
 #include "plumb/loam/odometry.hpp"
 #include "plumb/search/kdtree.hpp"
 
+#include "lio_problem.hpp"
+
 namespace plumb {
 namespace {
 
-constexpr int kDimJoint = 30;
-using Vector30d = Eigen::Matrix<double, kDimJoint, 1>;
-using Matrix30d = Eigen::Matrix<double, kDimJoint, kDimJoint>;
-
-Eigen::Isometry3d pose_of(const ImuState& s) { return se3::make(s.R_world_body, s.p_world_body); }
-
-/// x (-) m in ImuTangent order (rotation as log(R_m^T R_x)).
-Vector15d state_error(const ImuState& x, const ImuState& m) {
-  Vector15d e;
-  e.segment<3>(ImuTangent::kR) = so3::log(m.R_world_body.transpose() * x.R_world_body);
-  e.segment<3>(ImuTangent::kP) = x.p_world_body - m.p_world_body;
-  e.segment<3>(ImuTangent::kV) = x.v_world - m.v_world;
-  e.segment<3>(ImuTangent::kBg) = x.bias.gyro - m.bias.gyro;
-  e.segment<3>(ImuTangent::kBa) = x.bias.accel - m.bias.accel;
-  return e;
-}
-
-/// Huber rho on a squared whitened norm s (RobustLoss convention: rho(s) = s inside the scale).
-double huber_rho(double s, double k) { return s <= k * k ? s : 2.0 * k * std::sqrt(s) - k * k; }
-double huber_weight(double s, double k) { return s <= k * k ? 1.0 : k / std::sqrt(s); }
-
-/// The LiDAR residuals of Zhou et al. 2021, eq. 6, 7, 20, as functions of the IMU state j: a query point s in
-/// the IMU frame maps to q = R s + p; Jacobians w.r.t. [dphi, dp] (right perturbation of R, p + dp).
-/// A correspondence's weight multiplies its whitened residual (1: its kind's sigma). Returns 1/2 sum
-/// rho; adds the IRLS-weighted normal equations, and to sum_sq the squared residuals [m^2], when H
-/// is not null.
-double lidar_terms(const std::vector<LoamCorrespondence>& corr, const std::vector<Vector3d>& s_imu, const ImuState& x,
-                   const HybridLioSettings& set, Matrix6d* H, Vector6d* g, double* sum_sq) {
-  const Matrix3d& R = x.R_world_body;
-  const Vector3d& p = x.p_world_body;
-  double cost = 0.0;
-  Eigen::Matrix<double, 3, 6> Jq;
-  for (std::size_t k = 0; k < corr.size(); ++k) {
-    const LoamCorrespondence& c = corr[k];
-    const Vector3d q = R * s_imu[k] + p;
-    if (H != nullptr) {
-      Jq.leftCols<3>() = -R * hat(s_imu[k]);
-      Jq.rightCols<3>().setIdentity();
-    }
-    if (c.kind == LoamCorrespondence::Kind::kPlane) {
-      const double inv = c.weight / set.plane_sigma;
-      const double d = c.dir.dot(q - c.a);
-      const double r = inv * d;
-      const double s = r * r;
-      cost += 0.5 * huber_rho(s, set.huber_scale);
-      if (H != nullptr) {
-        const Matrix16d J = inv * c.dir.transpose() * Jq;
-        const double w = huber_weight(s, set.huber_scale);
-        H->noalias() += w * J.transpose() * J;
-        g->noalias() += w * J.transpose() * r;
-        *sum_sq += d * d;
-      }
-    } else {
-      const bool edge = c.kind == LoamCorrespondence::Kind::kEdge;
-      const double inv = c.weight / (edge ? set.edge_sigma : set.point_sigma);
-      const Vector3d d = edge ? Vector3d(c.dir.cross(q - c.a)) : Vector3d(q - c.a);
-      const Vector3d r = inv * d;
-      const double s = r.squaredNorm();
-      cost += 0.5 * huber_rho(s, set.huber_scale);
-      if (H != nullptr) {
-        const Matrix36d J = edge ? Matrix36d(inv * hat(c.dir) * Jq) : Matrix36d(inv * Jq);
-        const double w = huber_weight(s, set.huber_scale);
-        H->noalias() += w * J.transpose() * J;
-        g->noalias() += w * J.transpose() * r;
-        *sum_sq += d.squaredNorm();
-      }
-    }
-  }
-  return cost;
-}
-
-/// IcpMetric::kPointToDistribution pairs: each point of `cur`, moved by T_map_cur, against the mean
-/// and covariance of its icp_neighbors nearest map points within max_correspondence_distance (at
-/// least 3 of them). A pair becomes three kPlane correspondences, one along each covariance axis,
-/// whose weight turns the plane residual's 1 / plane_sigma into 1 / sqrt(lambda + point_sigma^2):
-/// together the Mahalanobis distance of the point. Appends to corr; returns the pairs.
-std::size_t associate_distributions(const PointCloud& map, const KdTree3f& tree, const PointCloud& cur,
-                                    const Eigen::Isometry3d& T_map_cur, const HybridLioSettings& set,
-                                    std::vector<LoamCorrespondence>& corr) {
-  const std::size_t k = static_cast<std::size_t>(set.icp_neighbors);
-  std::size_t idx[64];
-  float d2[64];
-  const float max_sq = static_cast<float>(set.max_correspondence_distance * set.max_correspondence_distance);
-  const Eigen::Matrix3f R = T_map_cur.linear().cast<float>();
-  const Eigen::Vector3f t = T_map_cur.translation().cast<float>();
-  const double var0 = set.point_sigma * set.point_sigma;
-  std::size_t pairs = 0;
-  for (const Vector3f& p : cur.points) {
-    if (!p.allFinite()) continue;
-    const std::size_t m = tree.knn(R * p + t, k, idx, d2, max_sq);
-    if (m < 3) continue;
-    Vector3d mean;
-    Matrix3d cov;
-    loam_neighbour_moments(map, idx, m, mean, cov);
-    Eigen::SelfAdjointEigenSolver<Matrix3d> eig;
-    eig.computeDirect(cov);
-    for (int a = 0; a < 3; ++a) {
-      const double lambda = std::max(eig.eigenvalues()(a), 0.0);
-      corr.push_back({LoamCorrespondence::Kind::kPlane, p.cast<double>(), mean, eig.eigenvectors().col(a),
-                      set.plane_sigma / std::sqrt(lambda + var0)});
-    }
-    ++pairs;
-  }
-  return pairs;
-}
+using lio_detail::JointProblem;
+using lio_detail::Matrix30d;
+using lio_detail::Vector30d;
+using lio_detail::pose_of;
 
 void check_map_settings(const VoxelHashMapSettings& m, const char* name) {
   PLUMB_CHECK(std::isfinite(m.voxel_size) && m.voxel_size > 0.0 && m.max_points_per_voxel >= 1 &&
@@ -358,62 +259,136 @@ void HybridLio::update_maps(const LoamFeatures& f, const PointCloud& cloud, cons
   point_map_.prune(c);
 }
 
-LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
-  const auto t_start = std::chrono::steady_clock::now();
-  frame_lidar.check_consistent("HybridLio::process");
-  const HybridLioSettings& set = settings_;
-  LioFrameResult res;
-  res.stamp = stamp;
-  res.num_points = frame_lidar.size();
-  auto finish = [&](LioFrameResult& r) {
-    r.T_world_base = T_world_base();
-    r.v_world = state_.v_world;
-    r.bias = state_.bias;
-    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-    return r;
-  };
-  if (!std::isfinite(stamp) || (initialized_ && !(stamp > last_stamp_))) {
-    res.mode = LioFrameMode::kSkipped;
-    res.status = Status::kInvalidInput;
-    return finish(res);
-  }
-  const bool imu_mode = set.mode != LioMode::kLoam;
-  const double dt = initialized_ ? stamp - last_stamp_ : 0.0;
+// ---- process() and its stages ---------------------------------------------------------------------
 
-  // 1. Prediction: IMU preintegration from the previous frame, or constant velocity.
+struct HybridLio::Frame {
+  std::chrono::steady_clock::time_point start;
+  double stamp = 0.0;
+  double dt = 0.0;  ///< since the last frame [s]
+  LioFrameResult res;
+  // predict()
+  std::optional<ImuPreintegration> pim;
+  ImuState pred;
+  // extract()
+  PointCloud cloud;           ///< deskewed frame
+  LoamFeatures feats;         ///< LOAM features (edges off the ground; dense plane queries if set)
+  LoamFeatures ground_feats;  ///< ground plane queries
+  PointCloud icp_points;      ///< ICP queries: off the ground, one point per voxel
+  // associate() / solve()
+  Vector3d here = Vector3d::Zero();  ///< predicted LiDAR position, for the search structures' staleness
+  LioFrameMode lidar_mode = LioFrameMode::kLoam;
+  bool tried_icp = false;
+  bool lidar_ok = true;
+  bool converged = false;
+  std::size_t num_matched = 0;
+  std::vector<LoamCorrespondence> corr;
+  std::vector<Vector3d> s_imu;  ///< corr[k].p in the IMU frame
+  ImuState xi, xj;              ///< the previous and the current state being solved for
+};
+
+namespace {
+
+LoamSettings map_association_settings(const HybridLioSettings& set) {
+  LoamSettings ls;
+  ls.max_correspondence_distance = set.max_correspondence_distance;
+  ls.map_neighbors = set.map_neighbors;
+  ls.map_plane_tolerance = set.map_plane_tolerance;
+  ls.map_edge_ratio = set.map_edge_ratio;
+  ls.map_plane_ratio = set.map_plane_ratio;
+  return ls;
+}
+
+std::vector<Vector3f> voxel_downsample(const std::vector<Vector3f>& pts, double voxel) {
+  VoxelHashMap ds({voxel, 1, 1e12, std::numeric_limits<std::size_t>::max()});
+  ds.insert(pts);
+  return ds.points();
+}
+
+}  // namespace
+
+LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
+  Frame f;
+  f.start = std::chrono::steady_clock::now();
+  frame_lidar.check_consistent("HybridLio::process");
+  f.stamp = stamp;
+  f.res.stamp = stamp;
+  f.res.num_points = frame_lidar.size();
+  if (!std::isfinite(stamp) || (initialized_ && !(stamp > last_stamp_))) {
+    f.res.mode = LioFrameMode::kSkipped;
+    f.res.status = Status::kInvalidInput;
+    return finish(f);
+  }
+  f.dt = initialized_ ? stamp - last_stamp_ : 0.0;
+  predict(f);
+  extract(f, frame_lidar);
+  if (!initialized_ && f.cloud.size() < settings_.min_init_points) {
+    f.res.mode = LioFrameMode::kSkipped;
+    f.res.status = Status::kInsufficientData;
+    return finish(f);
+  }
+  if (!initialized_) {
+    initialized_ = true;
+    last_stamp_ = stamp;
+    remember_pose(stamp);
+    ++num_frames_;
+    f.res.mode = LioFrameMode::kInit;
+    f.res.status = f.feats.status;
+    update_maps(f.feats, f.icp_points, pose_of(state_) * T_imu_lidar_);
+    return finish(f);
+  }
+  solve(f);
+  conclude(f);
+  return finish(f);
+}
+
+LioFrameResult HybridLio::finish(Frame& f) const {
+  f.res.T_world_base = T_world_base();
+  f.res.v_world = state_.v_world;
+  f.res.bias = state_.bias;
+  f.res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - f.start).count();
+  return f.res;
+}
+
+void HybridLio::predict(Frame& f) const {
+  const HybridLioSettings& set = settings_;
   PreintegrationSettings pis;
   pis.noise = set.imu_noise;
   pis.g_world = Vector3d(0.0, 0.0, -set.gravity);
   pis.max_gap = set.max_imu_gap;
-  std::optional<ImuPreintegration> pim;
-  ImuState pred = state_;
+  f.pred = state_;
   if (initialized_) {
-    if (imu_mode) {
-      pim.emplace(state_.bias, pis);
-      if (pim->integrate(imu_, last_stamp_, stamp) == Status::kOk && pim->num_measurements() > 0) {
-        pred = pim->predict(state_);
+    if (set.mode != LioMode::kLoam) {
+      f.pim.emplace(state_.bias, pis);
+      if (f.pim->integrate(imu_, last_stamp_, f.stamp) == Status::kOk && f.pim->num_measurements() > 0) {
+        f.pred = f.pim->predict(state_);
       } else {
-        pim.reset();
-        res.imu_gap = true;
+        f.pim.reset();
+        f.res.imu_gap = true;
       }
     }
-    if (!pim) {
-      const Eigen::Isometry3d T = pose_of(state_) * se3::exp(twist_ * dt);
-      pred.R_world_body = T.linear();
-      pred.p_world_body = T.translation();
+    if (!f.pim) {
+      const Eigen::Isometry3d T = pose_of(state_) * se3::exp(twist_ * f.dt);
+      f.pred.R_world_body = T.linear();
+      f.pred.p_world_body = T.translation();
     }
   }
-  res.imu_used = pim.has_value();
+  f.res.imu_used = f.pim.has_value();
+}
 
-  // 2. Deskew to the stamp, then range image and cosine features (Zhou et al. 2021, sec. 1.1-1.2).
-  PointCloud cloud = frame_lidar;
-  if (imu_mode) deskew(cloud, stamp, pred, pim.has_value() || !initialized_, res);
+void HybridLio::extract(Frame& f, const PointCloud& frame_lidar) const {
+  const HybridLioSettings& set = settings_;
+  LioFrameResult& res = f.res;
+  // Deskew to the stamp, then range image and cosine features (Zhou et al. 2021, sec. 1.1-1.2).
+  f.cloud = frame_lidar;
+  const PointCloud& cloud = f.cloud;
+  if (set.mode != LioMode::kLoam) deskew(f.cloud, f.stamp, f.pred, f.pim.has_value() || !initialized_, res);
   // The image is built on the deskewed points, so near the sensor a ring loses the points whose
   // azimuth moved into a neighbour's column. Building it from the frame as fired (LOAM's order)
   // keeps the rings whole, but made both simulated site runs drift more (hybrid mode, end error:
   // FZK-Haus 0.71 m against 0.009 m, duplex ~8 m against 3.7 m). The cause is open.
   const RangeImage image = build_range_image(cloud, set.image);
-  LoamFeatures feats = extract_loam_features(cloud, image, set.features);
+  LoamFeatures& feats = f.feats;
+  feats = extract_loam_features(cloud, image, set.features);
   res.num_plane_points = feats.planes.size();
   res.num_edge_points = feats.edges.size();
   res.num_plane_interval = feats.num_plane_interval;
@@ -423,7 +398,7 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
   RingGroundSettings gs;
   gs.max_slope_deg = set.ground_max_slope_deg;
   gs.plane_tolerance = set.ground_plane_tolerance;
-  const RingGroundResult ground_result = classify_ground(cloud, image, pred.R_world_body * T_imu_lidar_.linear(), gs);
+  const RingGroundResult ground_result = classify_ground(cloud, image, f.pred.R_world_body * T_imu_lidar_.linear(), gs);
   const std::vector<char>& ground = ground_result.ground;
   res.num_ground = ground_result.num_ground;
   res.num_ground_added = ground_result.num_from_plane;
@@ -431,12 +406,10 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
   // Edges only off the ground (LeGO-LOAM): on the road, range noise makes "corners" along a ring,
   // and lines fitted to them run along the ring circles, which pulls every frame onto the last.
   auto off_ground = [&](const std::vector<std::size_t>& idx) {
-    std::vector<std::size_t> keep;
-    for (std::size_t i : idx) {
-      if (!ground[i]) keep.push_back(i);
-    }
     PointCloud out;
-    for (std::size_t i : keep) out.points.push_back(cloud.points[i]);
+    for (std::size_t i : idx) {
+      if (!ground[i]) out.points.push_back(cloud.points[i]);
+    }
     return out;
   };
   feats.edges = off_ground(feats.edge_indices);
@@ -444,212 +417,140 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
   feats.edge_pool.clear();
   res.num_edge_points = feats.edges.size();
 
-  // ICP queries: the frame, one point per voxel.
-  PointCloud icp_points;
   std::vector<Vector3f> off, on;
   off.reserve(cloud.size());
   on.reserve(cloud.size());
   for (std::size_t i = 0; i < cloud.size(); ++i) (ground[i] ? on : off).push_back(cloud.points[i]);
-  auto downsample = [](const std::vector<Vector3f>& pts, double voxel) {
-    VoxelHashMap ds({voxel, 1, 1e12, std::numeric_limits<std::size_t>::max()});
-    ds.insert(pts);
-    return ds.points();
-  };
-  // Off the ground only: nearest-point pairs on the rings of a flat road pull the frame back
-  // onto the last one (the rings barely move with the sensor); height, roll and pitch come from
-  // the IMU and the previous state.
-  icp_points.points = downsample(off, set.icp_voxel_size);
+  // ICP queries, off the ground only: nearest-point pairs on the rings of a flat road pull the
+  // frame back onto the last one (the rings barely move with the sensor); height, roll and pitch
+  // come from the IMU and the previous state.
+  f.icp_points.points = voxel_downsample(off, set.icp_voxel_size);
   // Scan-to-map plane queries (LOAM's mapping step matches every "less flat" point, not only the
   // few selected per sector, which on an open site are nearly all on the road): the structure
   // off the ground on a fine grid, the ground on a coarse one (it only fixes height, roll, pitch).
   // The map association keeps only neighbourhoods that fit a plane.
   // Ground queries on their own as well: ICP frames match them point-to-plane against the plane
   // map (LeGO-LOAM's ground step: height, roll and pitch from the road in every mode).
-  LoamFeatures ground_feats;
-  ground_feats.planes.points = downsample(on, set.ground_query_voxel);
+  f.ground_feats.planes.points = voxel_downsample(on, set.ground_query_voxel);
   if (set.dense_plane_queries) {
-    feats.planes.points = downsample(off, set.plane_query_voxel);
-    const std::vector<Vector3f>& g = ground_feats.planes.points;
+    feats.planes.points = voxel_downsample(off, set.plane_query_voxel);
+    const std::vector<Vector3f>& g = f.ground_feats.planes.points;
     feats.planes.points.insert(feats.planes.points.end(), g.begin(), g.end());
     feats.plane_candidates.points.clear();
     feats.plane_pool = feats.planes;
   }
+}
 
-  if (!initialized_ && cloud.size() < set.min_init_points) {
-    res.mode = LioFrameMode::kSkipped;
-    res.status = Status::kInsufficientData;
-    return finish(res);
-  }
-  if (!initialized_) {
-    initialized_ = true;
-    last_stamp_ = stamp;
-    remember_pose(stamp);
-    ++num_frames_;
-    res.mode = LioFrameMode::kInit;
-    res.status = feats.status;
-    update_maps(feats, icp_points, pose_of(state_) * T_imu_lidar_);
-    return finish(res);
-  }
-
-  // 3. The hybrid switch (Zhou et al. 2021, sec. 3.2).
-  LioFrameMode lidar_mode = LioFrameMode::kLoam;
-  if (set.mode == LioMode::kHybrid && !set.switch_on_plane_matches && res.num_structure_planes < set.min_plane_points) {
-    lidar_mode = LioFrameMode::kIcp;
-  }
-
-  LoamSettings ls;
-  ls.max_correspondence_distance = set.max_correspondence_distance;
-  ls.map_neighbors = set.map_neighbors;
-  ls.map_plane_tolerance = set.map_plane_tolerance;
-  ls.map_edge_ratio = set.map_edge_ratio;
-  ls.map_plane_ratio = set.map_plane_ratio;
-  const Vector3d here = (pose_of(pred) * T_imu_lidar_).translation();
+std::size_t HybridLio::associate(const Frame& f, LioFrameMode m, const ImuState& x,
+                                 std::vector<LoamCorrespondence>& corr) {
+  const HybridLioSettings& set = settings_;
   auto stale = [&](const Vector3d& at, std::size_t frame) {
-    return (here - at).norm() > set.map_rebuild_distance ||
+    return (f.here - at).norm() > set.map_rebuild_distance ||
            num_frames_ - frame >= static_cast<std::size_t>(set.map_rebuild_frames);
   };
-  // Fills corr; returns the matched query points (an ICP pair to a distribution is three
-  // correspondences).
-  auto associate = [&](LioFrameMode m, const ImuState& x, std::vector<LoamCorrespondence>& corr) {
-    corr.clear();
-    const Eigen::Isometry3d T_world_lidar = pose_of(x) * T_imu_lidar_;
-    const bool loam_in_icp = set.icp_keep_loam || set.icp_ground_planes;
-    if (m == LioFrameMode::kLoam || loam_in_icp) {
-      if (!loam_tree_ || stale(loam_built_at_, loam_built_frame_)) {
-        PointCloud e, p;
-        e.points = edge_map_.points();
-        p.points = plane_map_.points();
-        loam_tree_.emplace(std::move(e), std::move(p));
-        loam_built_at_ = here;
-        loam_built_frame_ = num_frames_;
-      }
+  corr.clear();
+  const LoamSettings ls = map_association_settings(set);
+  const Eigen::Isometry3d T_world_lidar = pose_of(x) * T_imu_lidar_;
+  const bool loam_in_icp = set.icp_keep_loam || set.icp_ground_planes;
+  if (m == LioFrameMode::kLoam || loam_in_icp) {
+    if (!loam_tree_ || stale(loam_built_at_, loam_built_frame_)) {
+      PointCloud e, p;
+      e.points = edge_map_.points();
+      p.points = plane_map_.points();
+      loam_tree_.emplace(std::move(e), std::move(p));
+      loam_built_at_ = f.here;
+      loam_built_frame_ = num_frames_;
     }
-    std::size_t matched = 0;
-    if (m == LioFrameMode::kLoam) {
-      loam_associate_map(*loam_tree_, feats, T_world_lidar, ls, corr);
-      matched = corr.size();
-    } else {
-      if (!point_tree_ || stale(point_built_at_, point_built_frame_)) {
-        point_tree_.reset();
-        point_cloud_.points = point_map_.points();
-        point_tree_.emplace(point_cloud_);
-        point_built_at_ = here;
-        point_built_frame_ = num_frames_;
-      }
-      if (set.icp_metric == IcpMetric::kPointToDistribution) {
-        matched = associate_distributions(point_cloud_, *point_tree_, icp_points, T_world_lidar, set, corr);
-      } else {
-        loam_associate_points(point_cloud_, *point_tree_, icp_points, T_world_lidar, set.max_correspondence_distance,
-                              corr);
-        matched = corr.size();
-      }
-      // Too few ICP pairs is what makes the frame fall back to the prediction; ground planes alone
-      // do not count (they fix neither x, y nor yaw).
-      if (loam_in_icp && matched >= set.min_correspondences) {
-        const std::size_t before = corr.size();
-        loam_associate_map(*loam_tree_, set.icp_keep_loam ? feats : ground_feats, T_world_lidar, ls, corr);
-        matched += corr.size() - before;
-      }
-    }
-    return matched;
-  };
+  }
+  if (m == LioFrameMode::kLoam) {
+    loam_associate_map(*loam_tree_, f.feats, T_world_lidar, ls, corr);
+    return corr.size();
+  }
+  if (!point_tree_ || stale(point_built_at_, point_built_frame_)) {
+    point_tree_.reset();
+    point_cloud_.points = point_map_.points();
+    point_tree_.emplace(point_cloud_);
+    point_built_at_ = f.here;
+    point_built_frame_ = num_frames_;
+  }
+  std::size_t matched = 0;
+  if (set.icp_metric == IcpMetric::kPointToDistribution) {
+    // An ICP pair to a distribution is three correspondences.
+    matched = lio_detail::associate_distributions(point_cloud_, *point_tree_, f.icp_points, T_world_lidar, set, corr);
+  } else {
+    loam_associate_points(point_cloud_, *point_tree_, f.icp_points, T_world_lidar, set.max_correspondence_distance,
+                          corr);
+    matched = corr.size();
+  }
+  // Too few ICP pairs is what makes the frame fall back to the prediction; ground planes alone
+  // do not count (they fix neither x, y nor yaw).
+  if (loam_in_icp && matched >= set.min_correspondences) {
+    const std::size_t before = corr.size();
+    loam_associate_map(*loam_tree_, set.icp_keep_loam ? f.feats : f.ground_feats, T_world_lidar, ls, corr);
+    matched += corr.size() - before;
+  }
+  return matched;
+}
 
-  // 4. Joint problem over x_i (offset 0) and x_j (offset 15) with the IMU factor, or over the
-  //    pose of x_j alone (offset 0) without it (Zhou et al. 2021, eq. 19-22).
-  const bool with_imu = pim.has_value();
-  const int oj = with_imu ? 15 : 0;
-  const int n = with_imu ? 30 : 6;
-  Matrix15d U = Matrix15d::Zero();
-  if (with_imu) U = pim->sqrt_information_with_bias();
-  const ImuState prior_mean = state_;
-  ImuState xi = state_, xj = pred;
-  std::vector<LoamCorrespondence> corr;
-  std::vector<Vector3d> s_imu;
-  auto build = [&](const ImuState& a, const ImuState& b, Matrix30d* H, Vector30d* g, double* sum_sq) {
-    double cost = 0.0;
-    if (H != nullptr) { H->setZero(); g->setZero(); *sum_sq = 0.0; }
-    if (with_imu) {
-      const Vector15d e = state_error(a, prior_mean);
-      cost += 0.5 * e.dot(prior_information_ * e);
-      const ImuFactorResidual f = pim->residual(a, b);
-      const Vector15d r = U * f.r;
-      cost += 0.5 * r.squaredNorm();
-      if (H != nullptr) {
-        H->topLeftCorner<15, 15>() += prior_information_;
-        g->head<15>() += prior_information_ * e;
-        Eigen::Matrix<double, 15, 30> J;
-        J.leftCols<15>() = U * f.J_r_xi_i;
-        J.rightCols<15>() = U * f.J_r_xi_j;
-        H->noalias() += J.transpose() * J;
-        g->noalias() += J.transpose() * r;
-      }
+void HybridLio::associate_round(Frame& f, int iteration) {
+  const HybridLioSettings& set = settings_;
+  std::size_t matched = associate(f, f.lidar_mode, f.xj, f.corr);
+  if (iteration == 0 && set.mode == LioMode::kHybrid && set.switch_on_plane_matches) {
+    // The switch on what LOAM would use: plane residuals whose map plane is not flat (walls,
+    // roofs, not the road), the ones that fix x, y and yaw.
+    const double cos_flat = std::cos(set.ground_max_slope_deg * kPi / 180.0);
+    for (const LoamCorrespondence& c : f.corr) {
+      if (c.kind == LoamCorrespondence::Kind::kPlane && std::abs(c.dir.z()) < cos_flat) ++f.res.num_structure_matches;
     }
-    Matrix6d Hl = Matrix6d::Zero();
-    Vector6d gl = Vector6d::Zero();
-    cost += lidar_terms(corr, s_imu, b, set, H != nullptr ? &Hl : nullptr, &gl, sum_sq);
-    if (H != nullptr) {
-      H->block<6, 6>(oj, oj) += Hl;
-      g->segment<6>(oj) += gl;
+    if (f.res.num_structure_matches < set.min_plane_points) {
+      f.tried_icp = true;
+      f.lidar_mode = LioFrameMode::kIcp;
+      matched = associate(f, f.lidar_mode, f.xj, f.corr);
     }
-    return cost;
-  };
-  auto step_states = [&](const Vector30d& delta, ImuState& a, ImuState& b) {
-    if (with_imu) {
-      a = retract(xi, delta.head<15>());
-      b = retract(xj, delta.tail<15>());
-    } else {
-      Vector15d d = Vector15d::Zero();
-      d.head<6>() = delta.head<6>();
-      a = xi;
-      b = retract(xj, d);
+  }
+  if (matched < set.min_correspondences) {
+    if (set.mode == LioMode::kHybrid && !f.tried_icp) {  // hybrid: LOAM found too little, try ICP
+      f.tried_icp = true;
+      f.lidar_mode = LioFrameMode::kIcp;
+      matched = associate(f, f.lidar_mode, f.xj, f.corr);
     }
-  };
+    if (matched < set.min_correspondences) {
+      f.lidar_ok = false;
+      f.corr.clear();
+      matched = 0;
+    }
+  }
+  f.num_matched = matched;
+  f.s_imu.resize(f.corr.size());
+  for (std::size_t k = 0; k < f.corr.size(); ++k) f.s_imu[k] = T_imu_lidar_ * f.corr[k].p;
+}
 
-  bool lidar_ok = true;
-  std::size_t num_matched = 0;
-  bool tried_icp = lidar_mode == LioFrameMode::kIcp;
-  bool converged = false;
+void HybridLio::solve(Frame& f) {
+  const HybridLioSettings& set = settings_;
+  // The hybrid switch (Zhou et al. 2021, sec. 3.2).
+  f.lidar_mode = LioFrameMode::kLoam;
+  if (set.mode == LioMode::kHybrid && !set.switch_on_plane_matches && f.res.num_structure_planes < set.min_plane_points) {
+    f.lidar_mode = LioFrameMode::kIcp;
+  }
+  f.tried_icp = f.lidar_mode == LioFrameMode::kIcp;
+  f.here = (pose_of(f.pred) * T_imu_lidar_).translation();
+  f.xi = state_;
+  f.xj = f.pred;
+  const JointProblem problem(set, f.pim ? &*f.pim : nullptr, state_, prior_information_);
+  const int n = problem.dim();
   double lambda = 1e-4;
   Matrix30d H;
   Vector30d g;
   double sum_sq = 0.0;
   for (int it = 0; it < set.max_iterations; ++it) {
-    if (lidar_ok) {
-      std::size_t matched = associate(lidar_mode, xj, corr);
-      if (it == 0 && set.mode == LioMode::kHybrid && set.switch_on_plane_matches) {
-        // The switch on what LOAM would use: plane residuals whose map plane is not flat (walls,
-        // roofs, not the road), the ones that fix x, y and yaw.
-        const double cos_flat = std::cos(set.ground_max_slope_deg * kPi / 180.0);
-        for (const LoamCorrespondence& c : corr) {
-          if (c.kind == LoamCorrespondence::Kind::kPlane && std::abs(c.dir.z()) < cos_flat) ++res.num_structure_matches;
-        }
-        if (res.num_structure_matches < set.min_plane_points) {
-          tried_icp = true;
-          lidar_mode = LioFrameMode::kIcp;
-          matched = associate(lidar_mode, xj, corr);
-        }
-      }
-      if (matched < set.min_correspondences) {
-        if (set.mode == LioMode::kHybrid && !tried_icp) {  // hybrid: LOAM found too little, try ICP
-          tried_icp = true;
-          lidar_mode = LioFrameMode::kIcp;
-          matched = associate(lidar_mode, xj, corr);
-        }
-        if (matched < set.min_correspondences) {
-          lidar_ok = false;
-          corr.clear();
-          matched = 0;
-          if (!with_imu) break;
-        }
-      }
-      num_matched = matched;
-      s_imu.resize(corr.size());
-      for (std::size_t k = 0; k < corr.size(); ++k) s_imu[k] = T_imu_lidar_ * corr[k].p;
+    if (f.lidar_ok) {
+      associate_round(f, it);
+      if (!f.lidar_ok && !problem.with_imu()) break;
     }
-    res.iterations = it + 1;
-    const double cost = build(xi, xj, &H, &g, &sum_sq);
-    res.num_correspondences = num_matched;
-    res.rmse = num_matched == 0 ? 0.0 : std::sqrt(sum_sq / static_cast<double>(num_matched));
+    f.res.iterations = it + 1;
+    const double cost = problem.build(f.xi, f.xj, f.corr, f.s_imu, &H, &g, &sum_sq);
+    f.res.num_correspondences = f.num_matched;
+    f.res.rmse = f.num_matched == 0 ? 0.0 : std::sqrt(sum_sq / static_cast<double>(f.num_matched));
     bool accepted = false;
     Vector30d delta = Vector30d::Zero();
     for (int attempt = 0; attempt < 10 && !accepted; ++attempt) {
@@ -658,34 +559,41 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
       delta.head(n) = A.ldlt().solve(-g.head(n));
       if (!delta.allFinite()) break;
       ImuState a, b;
-      step_states(delta, a, b);
-      if (build(a, b, nullptr, nullptr, nullptr) <= cost) {
-        xi = a;
-        xj = b;
+      problem.step(delta, f.xi, f.xj, a, b);
+      if (problem.build(a, b, f.corr, f.s_imu, nullptr, nullptr, nullptr) <= cost) {
+        f.xi = a;
+        f.xj = b;
         accepted = true;
         lambda = std::max(lambda * 0.1, 1e-12);
       } else {
         lambda = std::min(lambda * 10.0, 1e12);
       }
     }
-    const Vector6d dj = delta.segment<6>(oj);
+    const Vector6d dj = delta.segment<6>(problem.offset_j());
     if (!accepted || (dj.head<3>().norm() < set.min_step_rotation && dj.tail<3>().norm() < set.min_step_translation)) {
-      converged = true;
+      f.converged = true;
       break;
     }
   }
+}
 
-  // 5. Outcome, marginal prior for the next frame, map update.
-  if (lidar_ok) {
-    res.mode = lidar_mode;
-    res.status = converged ? Status::kOk : Status::kNotConverged;
+void HybridLio::conclude(Frame& f) {
+  LioFrameResult& res = f.res;
+  if (f.lidar_ok) {
+    res.mode = f.lidar_mode;
+    res.status = f.converged ? Status::kOk : Status::kNotConverged;
   } else {
     res.mode = LioFrameMode::kPrediction;
     res.status = Status::kInsufficientData;
-    if (!with_imu) xj = pred;
+    if (!f.pim) f.xj = f.pred;
   }
-  if (with_imu) {
-    build(xi, xj, &H, &g, &sum_sq);
+  if (f.pim) {
+    // The marginal prior on x_j: the Schur complement of x_i in the joint system at the solution.
+    const JointProblem problem(settings_, &*f.pim, state_, prior_information_);
+    Matrix30d H;
+    Vector30d g;
+    double sum_sq = 0.0;
+    problem.build(f.xi, f.xj, f.corr, f.s_imu, &H, &g, &sum_sq);
     const Matrix15d Hii = H.topLeftCorner<15, 15>();
     const Eigen::Matrix<double, 15, 15> Hij = H.topRightCorner<15, 15>();
     const Eigen::LDLT<Matrix15d> ldlt(Hii);
@@ -695,22 +603,22 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
     if (L.allFinite()) prior_information_ = L;
     else reset_prior();
   } else {
-    xj.v_world = (xj.p_world_body - state_.p_world_body) / dt;
-    xj.bias = state_.bias;
+    f.xj.v_world = (f.xj.p_world_body - state_.p_world_body) / f.dt;
+    f.xj.bias = state_.bias;
     reset_prior();
   }
-  state_ = xj;
-  remember_pose(stamp);
-  last_stamp_ = stamp;
+  state_ = f.xj;
+  remember_pose(f.stamp);
+  last_stamp_ = f.stamp;
   ++num_frames_;
-  if (lidar_ok) update_maps(feats, icp_points, pose_of(state_) * T_imu_lidar_);
+  if (f.lidar_ok) update_maps(f.feats, f.icp_points, pose_of(state_) * T_imu_lidar_);
 
   // Keep the IMU buffer bounded: samples older than a second before this frame are not needed.
   if (imu_.size() > 4096) {
-    auto it = std::upper_bound(imu_.begin(), imu_.end(), stamp - 1.0, [](double t, const ImuSample& s) { return t < s.stamp; });
+    auto it = std::upper_bound(imu_.begin(), imu_.end(), f.stamp - 1.0,
+                               [](double t, const ImuSample& s) { return t < s.stamp; });
     if (it - imu_.begin() > 2048) imu_.erase(imu_.begin(), it);
   }
-  return finish(res);
 }
 
 }  // namespace plumb

@@ -250,6 +250,27 @@ class HybridLio {
   const VoxelHashMap& point_map() const { return point_map_; }    ///< @brief Local ICP point map.
 
  private:
+  /// One frame on its way through process(): the prediction, the frame's features and queries,
+  /// and the solver's state (defined in hybrid_lio.cpp).
+  struct Frame;
+
+  // The stages of process(), in order.
+  /// 1. The state at the frame's stamp: IMU preintegration from the last frame, or constant velocity.
+  void predict(Frame& f) const;
+  /// 2. Deskew, range image, cosine features, ground, and the ICP / plane / ground query points.
+  void extract(Frame& f, const PointCloud& frame_lidar) const;
+  /// 3. Map pairs for the LiDAR mode `m` at state x (the search structures are rebuilt when stale);
+  ///    returns the matched query points.
+  std::size_t associate(const Frame& f, LioFrameMode m, const ImuState& x, std::vector<LoamCorrespondence>& corr);
+  /// 3'. The association of one solver round, with the hybrid switch and the fall-backs.
+  void associate_round(Frame& f, int iteration);
+  /// 4. The joint IMU + LiDAR problem solved by Levenberg-Marquardt.
+  void solve(Frame& f);
+  /// 5. Outcome, marginal prior for the next frame, state and maps.
+  void conclude(Frame& f);
+  /// Fills the result's state fields and wall time.
+  LioFrameResult finish(Frame& f) const;
+
   /// Appends the current pose to recent_poses_ and updates twist_.
   void remember_pose(double stamp);
   void deskew(PointCloud& cloud, double stamp, const ImuState& at_stamp, bool use_imu, LioFrameResult& res) const;
