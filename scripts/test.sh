@@ -36,12 +36,22 @@ cmake -S . -B build/ci "${launcher[@]}" -DCMAKE_BUILD_TYPE=Release -DPLUMB_WERRO
       -DCMAKE_INSTALL_PREFIX="$root/build/ci/prefix" >/dev/null
 cmake --build build/ci -j"$jobs"
 
-step "package: install, then a consumer that does find_package(plumb)"
+step "package: install, then consumers that find_package(plumb) and link one component each"
 rm -rf build/ci/prefix build/package
 cmake --install build/ci >/dev/null
 cmake -S tests/package -B build/package -DCMAKE_PREFIX_PATH="$root/build/ci/prefix" >/dev/null
 cmake --build build/package -j"$jobs"
-./build/package/plumb_consumer
+for component in plumb core io bim sim pipeline; do
+  consumer=build/package/plumb_consumer
+  [ "$component" = plumb ] || consumer="build/package/plumb_${component}_consumer"
+  "$consumer"
+done
+# plumb::core needs nothing but Eigen: its consumer links neither zlib nor liblzf.
+if grep -Eq '(libz\.|-lz( |$)|lzf)' build/package/CMakeFiles/plumb_core_consumer.dir/link.txt; then
+  echo "test.sh: plumb::core's consumer links zlib or liblzf:" >&2
+  cat build/package/CMakeFiles/plumb_core_consumer.dir/link.txt >&2
+  exit 1
+fi
 
 step "README command 1's demo steps on this build (scripts/run_demo.sh)"
 # The same script scripts/demo.sh ends with: if a new user's first command would fail, CI fails.
