@@ -435,140 +435,178 @@ StepFile StepFile::read(const std::string& path) {
   return parse(ss.str(), path);
 }
 
+namespace {
+
+/// The schema a FILE_SCHEMA name belongs to (case-insensitive prefix).
+StepSchema schema_of(const std::string& schema_name) {
+  std::string upper = schema_name;
+  for (char& c : upper) {
+    if (c >= 'a' && c <= 'z') c = static_cast<char>(c - 'a' + 'A');
+  }
+  if (upper.rfind("IFC2X3", 0) == 0) return StepSchema::kIfc2x3;
+  if (upper.rfind("IFC4X3", 0) == 0) return StepSchema::kIfc4x3;
+  if (upper.rfind("IFC4", 0) == 0) return StepSchema::kIfc4;
+  return StepSchema::kUnknown;
+}
+
+}  // namespace
+
+/// The indexing pass of StepFile::parse over the whole buffer: the header, the instances of the
+/// DATA sections, then the id index.
+class StepFile::Parser {
+ public:
+  explicit Parser(StepFile& f) : f_(f), s_{f.buffer_, f.name_} {}
+
+  /// The magic line and the HEADER section, which gives the schema name.
+  void header() {
+    const std::string& buf = f_.buffer_;
+    // Skip a UTF-8 byte order mark.
+    if (buf.compare(0, 3, "\xEF\xBB\xBF") == 0) s_.pos = 3;
+    if (!s_.accept("ISO-10303-21;")) s_.fail("not a STEP file (expected 'ISO-10303-21;')");
+    if (!s_.accept("HEADER;")) s_.fail("expected 'HEADER;'");
+    // Header entities: NAME(args);
+    for (;;) {
+      s_.skip_ws();
+      if (s_.at_end()) s_.fail("truncated header (no ENDSEC)");
+      if (s_.accept("ENDSEC;")) break;
+      const std::uint32_t line = s_.line;
+      const std::string kw = s_.ident();
+      if (kw.empty()) s_.fail("malformed header entry");
+      s_.skip_ws();
+      if (s_.at_end() || buf[s_.pos] != '(') s_.fail("expected '(' after " + kw);
+      ++s_.pos;
+      const std::size_t begin = s_.pos;
+      s_.skip_to_matching_paren();
+      const std::size_t end = s_.pos;
+      ++s_.pos;
+      if (!s_.accept(";")) s_.fail("expected ';' after " + kw);
+      if (kw == "FILE_SCHEMA") {
+        StepEntity e;
+        e.line = line;
+        e.args_begin = static_cast<std::uint32_t>(begin);
+        e.args_end = static_cast<std::uint32_t>(end);
+        f_.type_names_.push_back(kw);
+        const auto args = f_.args(e);
+        f_.type_names_.clear();
+        if (!args.empty() && args[0].is_list() && !args[0].items.empty() &&
+            args[0].items[0].kind == StepValue::Kind::kString) {
+          f_.schema_name_ = args[0].items[0].text;
+        }
+      }
+    }
+  }
+
+  /// The DATA sections up to END-ISO-10303-21.
+  void data() {
+    const std::string& buf = f_.buffer_;
+    bool saw_data = false;
+    for (;;) {
+      s_.skip_ws();
+      if (s_.at_end()) {
+        if (!saw_data) s_.fail("no DATA section");
+        s_.fail("truncated file (missing ENDSEC / END-ISO-10303-21)");
+      }
+      if (s_.accept("END-ISO-10303-21;")) break;
+      if (!s_.accept("DATA")) s_.fail("expected 'DATA;'");
+      s_.skip_ws();
+      if (!s_.at_end() && buf[s_.pos] == '(') {  // DATA('name', ...) of edition 3
+        ++s_.pos;
+        s_.skip_to_matching_paren();
+        ++s_.pos;
+      }
+      if (!s_.accept(";")) s_.fail("expected ';' after DATA");
+      saw_data = true;
+      for (;;) {
+        s_.skip_ws();
+        if (s_.at_end()) s_.fail("truncated DATA section (no ENDSEC)");
+        if (s_.accept("ENDSEC;")) break;
+        instance();
+      }
+    }
+  }
+
+  /// Id index: dense when ids are compact, else a hash map.
+  void index() {
+    const std::size_t n = f_.entities_.size();
+    if (static_cast<std::size_t>(max_id_) <= 4 * n + 4096) {
+      f_.dense_index_.assign(static_cast<std::size_t>(max_id_) + 1, -1);
+      for (std::size_t i = 0; i < n; ++i) {
+        std::int32_t& slot = f_.dense_index_[f_.entities_[i].id];
+        if (slot >= 0) duplicate(i);
+        slot = static_cast<std::int32_t>(i);
+      }
+    } else {
+      f_.sparse_index_.reserve(n);
+      for (std::size_t i = 0; i < n; ++i) {
+        if (!f_.sparse_index_.emplace(f_.entities_[i].id, static_cast<std::uint32_t>(i)).second) duplicate(i);
+      }
+    }
+  }
+
+ private:
+  /// One instance `#id = TYPE(args);` (or a complex one, `#id = (...);`), indexed, not decoded.
+  void instance() {
+    const std::string& buf = f_.buffer_;
+    if (buf[s_.pos] != '#') s_.fail(std::string("expected '#' at the start of an instance, got '") + buf[s_.pos] + "'");
+    StepEntity e;
+    e.line = s_.line;
+    ++s_.pos;
+    std::uint64_t id = 0;
+    const std::size_t start = s_.pos;
+    while (!s_.at_end() && buf[s_.pos] >= '0' && buf[s_.pos] <= '9') {
+      id = id * 10 + static_cast<std::uint64_t>(buf[s_.pos] - '0');
+      if (id > 0x7FFFFFFFULL) s_.fail("instance id out of range");
+      ++s_.pos;
+    }
+    if (s_.pos == start) s_.fail("'#' without a number");
+    e.id = static_cast<std::uint32_t>(id);
+    if (!s_.accept("=")) s_.fail("expected '=' after #" + std::to_string(id));
+    s_.skip_ws();
+    std::string type;
+    if (!s_.at_end() && buf[s_.pos] == '(') {
+      type = "";  // complex (multi-leaf) instance: indexed, not decoded
+    } else {
+      type = s_.ident();
+      if (type.empty()) s_.fail("expected an entity type name after #" + std::to_string(id) + "=");
+      s_.skip_ws();
+    }
+    if (s_.at_end() || buf[s_.pos] != '(') s_.fail("expected '(' after " + type);
+    ++s_.pos;
+    e.args_begin = static_cast<std::uint32_t>(s_.pos);
+    s_.skip_to_matching_paren();
+    e.args_end = static_cast<std::uint32_t>(s_.pos);
+    ++s_.pos;
+    if (!s_.accept(";")) s_.fail("expected ';' after instance #" + std::to_string(id));
+    auto it = f_.type_lookup_.find(type);
+    if (it == f_.type_lookup_.end()) {
+      it = f_.type_lookup_.emplace(type, static_cast<std::uint32_t>(f_.type_names_.size())).first;
+      f_.type_names_.push_back(type);
+    }
+    e.type = it->second;
+    max_id_ = std::max(max_id_, e.id);
+    f_.entities_.push_back(e);
+  }
+
+  [[noreturn]] void duplicate(std::size_t i) const {
+    PLUMB_THROW(f_.name_ << ":" << f_.entities_[i].line << ": duplicate instance #" << f_.entities_[i].id);
+  }
+
+  StepFile& f_;
+  Scanner s_;
+  std::uint32_t max_id_ = 0;
+};
+
 StepFile StepFile::parse(std::string buffer, std::string name) {
   StepFile f;
   f.name_ = std::move(name);
   f.buffer_ = std::move(buffer);
   PLUMB_CHECK(f.buffer_.size() < std::numeric_limits<std::uint32_t>::max(),
               f.name_ << ": file larger than 4 GB is not supported");
-  const std::string& buf = f.buffer_;
-  Scanner s{buf, f.name_};
-  // Skip a UTF-8 byte order mark.
-  if (buf.compare(0, 3, "\xEF\xBB\xBF") == 0) s.pos = 3;
-  if (!s.accept("ISO-10303-21;")) s.fail("not a STEP file (expected 'ISO-10303-21;')");
-  if (!s.accept("HEADER;")) s.fail("expected 'HEADER;'");
-
-  std::uint32_t max_id = 0;
-  // Header entities: NAME(args);
-  for (;;) {
-    s.skip_ws();
-    if (s.at_end()) s.fail("truncated header (no ENDSEC)");
-    if (s.accept("ENDSEC;")) break;
-    const std::uint32_t line = s.line;
-    const std::string kw = s.ident();
-    if (kw.empty()) s.fail("malformed header entry");
-    s.skip_ws();
-    if (s.at_end() || buf[s.pos] != '(') s.fail("expected '(' after " + kw);
-    ++s.pos;
-    const std::size_t begin = s.pos;
-    s.skip_to_matching_paren();
-    const std::size_t end = s.pos;
-    ++s.pos;
-    if (!s.accept(";")) s.fail("expected ';' after " + kw);
-    if (kw == "FILE_SCHEMA") {
-      StepEntity e;
-      e.line = line;
-      e.args_begin = static_cast<std::uint32_t>(begin);
-      e.args_end = static_cast<std::uint32_t>(end);
-      f.type_names_.push_back(kw);
-      const auto args = f.args(e);
-      f.type_names_.clear();
-      if (!args.empty() && args[0].is_list() && !args[0].items.empty() &&
-          args[0].items[0].kind == StepValue::Kind::kString) {
-        f.schema_name_ = args[0].items[0].text;
-      }
-    }
-  }
-  std::string upper = f.schema_name_;
-  for (char& c : upper) {
-    if (c >= 'a' && c <= 'z') c = static_cast<char>(c - 'a' + 'A');
-  }
-  if (upper.rfind("IFC2X3", 0) == 0) {
-    f.schema_ = StepSchema::kIfc2x3;
-  } else if (upper.rfind("IFC4X3", 0) == 0) {
-    f.schema_ = StepSchema::kIfc4x3;
-  } else if (upper.rfind("IFC4", 0) == 0) {
-    f.schema_ = StepSchema::kIfc4;
-  }
-
-  bool saw_data = false;
-  for (;;) {
-    s.skip_ws();
-    if (s.at_end()) {
-      if (!saw_data) s.fail("no DATA section");
-      s.fail("truncated file (missing ENDSEC / END-ISO-10303-21)");
-    }
-    if (s.accept("END-ISO-10303-21;")) break;
-    if (!s.accept("DATA")) s.fail("expected 'DATA;'");
-    s.skip_ws();
-    if (!s.at_end() && buf[s.pos] == '(') {  // DATA('name', ...) of edition 3
-      ++s.pos;
-      s.skip_to_matching_paren();
-      ++s.pos;
-    }
-    if (!s.accept(";")) s.fail("expected ';' after DATA");
-    saw_data = true;
-    for (;;) {
-      s.skip_ws();
-      if (s.at_end()) s.fail("truncated DATA section (no ENDSEC)");
-      if (s.accept("ENDSEC;")) break;
-      if (buf[s.pos] != '#') s.fail(std::string("expected '#' at the start of an instance, got '") + buf[s.pos] + "'");
-      StepEntity e;
-      e.line = s.line;
-      ++s.pos;
-      std::uint64_t id = 0;
-      const std::size_t start = s.pos;
-      while (!s.at_end() && buf[s.pos] >= '0' && buf[s.pos] <= '9') {
-        id = id * 10 + static_cast<std::uint64_t>(buf[s.pos] - '0');
-        if (id > 0x7FFFFFFFULL) s.fail("instance id out of range");
-        ++s.pos;
-      }
-      if (s.pos == start) s.fail("'#' without a number");
-      e.id = static_cast<std::uint32_t>(id);
-      if (!s.accept("=")) s.fail("expected '=' after #" + std::to_string(id));
-      s.skip_ws();
-      std::string type;
-      if (!s.at_end() && buf[s.pos] == '(') {
-        type = "";  // complex (multi-leaf) instance: indexed, not decoded
-      } else {
-        type = s.ident();
-        if (type.empty()) s.fail("expected an entity type name after #" + std::to_string(id) + "=");
-        s.skip_ws();
-      }
-      if (s.at_end() || buf[s.pos] != '(') s.fail("expected '(' after " + type);
-      ++s.pos;
-      e.args_begin = static_cast<std::uint32_t>(s.pos);
-      s.skip_to_matching_paren();
-      e.args_end = static_cast<std::uint32_t>(s.pos);
-      ++s.pos;
-      if (!s.accept(";")) s.fail("expected ';' after instance #" + std::to_string(id));
-      auto it = f.type_lookup_.find(type);
-      if (it == f.type_lookup_.end()) {
-        it = f.type_lookup_.emplace(type, static_cast<std::uint32_t>(f.type_names_.size())).first;
-        f.type_names_.push_back(type);
-      }
-      e.type = it->second;
-      max_id = std::max(max_id, e.id);
-      f.entities_.push_back(e);
-    }
-  }
-  // Id index: dense when ids are compact, else a hash map.
-  const std::size_t n = f.entities_.size();
-  if (static_cast<std::size_t>(max_id) <= 4 * n + 4096) {
-    f.dense_index_.assign(static_cast<std::size_t>(max_id) + 1, -1);
-    for (std::size_t i = 0; i < n; ++i) {
-      std::int32_t& slot = f.dense_index_[f.entities_[i].id];
-      if (slot >= 0) PLUMB_THROW(f.name_ << ":" << f.entities_[i].line << ": duplicate instance #" << f.entities_[i].id);
-      slot = static_cast<std::int32_t>(i);
-    }
-  } else {
-    f.sparse_index_.reserve(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!f.sparse_index_.emplace(f.entities_[i].id, static_cast<std::uint32_t>(i)).second) {
-        PLUMB_THROW(f.name_ << ":" << f.entities_[i].line << ": duplicate instance #" << f.entities_[i].id);
-      }
-    }
-  }
+  Parser parser(f);
+  parser.header();
+  f.schema_ = schema_of(f.schema_name_);
+  parser.data();
+  parser.index();
   return f;
 }
 

@@ -85,14 +85,20 @@ std::uint64_t parse_header_uint(std::string_view tok, const std::string& name, s
   return v;
 }
 
-Header parse_header(const char* data, std::size_t size, const std::string& name) {
-  Header h;
-  LineCursor cur{data, data, data + size, 0};
+// The header's keyword lines as read, each list with the line it came from (0 = absent).
+struct HeaderLines {
   std::vector<std::string_view> names, sizes, types, counts;
   std::size_t fields_line = 0, size_line = 0, type_line = 0, count_line = 0;
-  bool have_width = false, have_height = false, have_points = false, have_data = false;
+  bool have_width = false, have_points = false;
   std::uint64_t width = 0, height = 1, points = 0;
   std::size_t width_line = 0, points_line = 0;
+};
+
+// Reads the header's lines up to DATA, which sets h's data kind, offset and line.
+HeaderLines read_header_lines(const char* data, std::size_t size, const std::string& name, Header& h) {
+  HeaderLines hl;
+  LineCursor cur{data, data, data + size, 0};
+  bool have_data = false;
   std::string_view line;
   while (cur.next(line)) {
     const auto tokens = split_tokens(line);
@@ -106,31 +112,30 @@ Header parse_header(const char* data, std::size_t size, const std::string& name)
     if (key == "VERSION") {
       // .5, 0.6, 0.7: the layout read here is the same.
     } else if (key == "FIELDS" || key == "COLUMNS") {
-      names.assign(tokens.begin() + 1, tokens.end());
-      fields_line = cur.line;
+      hl.names.assign(tokens.begin() + 1, tokens.end());
+      hl.fields_line = cur.line;
     } else if (key == "SIZE") {
-      sizes.assign(tokens.begin() + 1, tokens.end());
-      size_line = cur.line;
+      hl.sizes.assign(tokens.begin() + 1, tokens.end());
+      hl.size_line = cur.line;
     } else if (key == "TYPE") {
-      types.assign(tokens.begin() + 1, tokens.end());
-      type_line = cur.line;
+      hl.types.assign(tokens.begin() + 1, tokens.end());
+      hl.type_line = cur.line;
     } else if (key == "COUNT") {
-      counts.assign(tokens.begin() + 1, tokens.end());
-      count_line = cur.line;
+      hl.counts.assign(tokens.begin() + 1, tokens.end());
+      hl.count_line = cur.line;
     } else if (key == "WIDTH") {
       expect_one();
-      width = parse_header_uint(tokens[1], name, cur.line, key);
-      have_width = true;
-      width_line = cur.line;
+      hl.width = parse_header_uint(tokens[1], name, cur.line, key);
+      hl.have_width = true;
+      hl.width_line = cur.line;
     } else if (key == "HEIGHT") {
       expect_one();
-      height = parse_header_uint(tokens[1], name, cur.line, key);
-      have_height = true;
+      hl.height = parse_header_uint(tokens[1], name, cur.line, key);
     } else if (key == "POINTS") {
       expect_one();
-      points = parse_header_uint(tokens[1], name, cur.line, key);
-      have_points = true;
-      points_line = cur.line;
+      hl.points = parse_header_uint(tokens[1], name, cur.line, key);
+      hl.have_points = true;
+      hl.points_line = cur.line;
     } else if (key == "VIEWPOINT") {
       // Sensor pose; not kept (the cloud is in its own frame).
     } else if (key == "DATA") {
@@ -156,37 +161,42 @@ Header parse_header(const char* data, std::size_t size, const std::string& name)
   if (!have_data) {
     PLUMB_THROW(name << ":" << cur.line << ": not a PCD file or truncated header (no DATA line)");
   }
+  return hl;
+}
+
+// FIELDS, SIZE, TYPE and COUNT into h.fields (with offsets and roles) and h.point_size.
+void parse_fields(const HeaderLines& hl, const std::string& name, Header& h) {
   const std::size_t dl = h.data_line;
-  if (names.empty()) PLUMB_THROW(name << ":" << dl << ": header has no FIELDS");
-  if (sizes.size() != names.size()) {
-    PLUMB_THROW(name << ":" << (size_line ? size_line : dl) << ": SIZE has " << sizes.size() << " entries for "
-                     << names.size() << " FIELDS");
+  if (hl.names.empty()) PLUMB_THROW(name << ":" << dl << ": header has no FIELDS");
+  if (hl.sizes.size() != hl.names.size()) {
+    PLUMB_THROW(name << ":" << (hl.size_line ? hl.size_line : dl) << ": SIZE has " << hl.sizes.size()
+                     << " entries for " << hl.names.size() << " FIELDS");
   }
-  if (types.size() != names.size()) {
-    PLUMB_THROW(name << ":" << (type_line ? type_line : dl) << ": TYPE has " << types.size() << " entries for "
-                     << names.size() << " FIELDS");
+  if (hl.types.size() != hl.names.size()) {
+    PLUMB_THROW(name << ":" << (hl.type_line ? hl.type_line : dl) << ": TYPE has " << hl.types.size()
+                     << " entries for " << hl.names.size() << " FIELDS");
   }
-  if (!counts.empty() && counts.size() != names.size()) {
-    PLUMB_THROW(name << ":" << count_line << ": COUNT has " << counts.size() << " entries for " << names.size()
-                     << " FIELDS");
+  if (!hl.counts.empty() && hl.counts.size() != hl.names.size()) {
+    PLUMB_THROW(name << ":" << hl.count_line << ": COUNT has " << hl.counts.size() << " entries for "
+                     << hl.names.size() << " FIELDS");
   }
 
   h.field_of_role.fill(-1);
   std::uint64_t offset = 0;
-  for (std::size_t i = 0; i < names.size(); ++i) {
+  for (std::size_t i = 0; i < hl.names.size(); ++i) {
     Field f;
-    f.name = std::string(names[i]);
-    const std::uint64_t s = parse_header_uint(sizes[i], name, size_line, "SIZE");
-    if (types[i].size() != 1 || !valid_type_size(types[i][0], static_cast<int>(s > 8 ? 0 : s))) {
-      PLUMB_THROW(name << ":" << type_line << ": field '" << f.name << "' has unsupported TYPE " << types[i]
-                       << " with SIZE " << sizes[i]);
+    f.name = std::string(hl.names[i]);
+    const std::uint64_t s = parse_header_uint(hl.sizes[i], name, hl.size_line, "SIZE");
+    if (hl.types[i].size() != 1 || !valid_type_size(hl.types[i][0], static_cast<int>(s > 8 ? 0 : s))) {
+      PLUMB_THROW(name << ":" << hl.type_line << ": field '" << f.name << "' has unsupported TYPE " << hl.types[i]
+                       << " with SIZE " << hl.sizes[i]);
     }
     f.size = static_cast<int>(s);
-    f.type = types[i][0];
-    if (!counts.empty()) {
-      f.count = parse_header_uint(counts[i], name, count_line, "COUNT");
+    f.type = hl.types[i][0];
+    if (!hl.counts.empty()) {
+      f.count = parse_header_uint(hl.counts[i], name, hl.count_line, "COUNT");
       if (f.count == 0 || f.count > kMaxCount) {
-        PLUMB_THROW(name << ":" << count_line << ": field '" << f.name << "' has COUNT " << f.count
+        PLUMB_THROW(name << ":" << hl.count_line << ": field '" << f.name << "' has COUNT " << f.count
                          << " (expected 1.." << kMaxCount << ")");
       }
     }
@@ -195,9 +205,9 @@ Header parse_header(const char* data, std::size_t size, const std::string& name)
     f.role = role_of(f.name);
     if (f.role != Role::kNone) {
       int& slot = h.field_of_role[static_cast<int>(f.role)];
-      if (slot >= 0) PLUMB_THROW(name << ":" << fields_line << ": field '" << f.name << "' appears twice");
+      if (slot >= 0) PLUMB_THROW(name << ":" << hl.fields_line << ": field '" << f.name << "' appears twice");
       if (f.count != 1) {
-        PLUMB_THROW(name << ":" << count_line << ": field '" << f.name << "' must have COUNT 1, has " << f.count);
+        PLUMB_THROW(name << ":" << hl.count_line << ": field '" << f.name << "' must have COUNT 1, has " << f.count);
       }
       slot = static_cast<int>(i);
     }
@@ -206,7 +216,7 @@ Header parse_header(const char* data, std::size_t size, const std::string& name)
   h.point_size = offset;
   for (Role r : {Role::kX, Role::kY, Role::kZ}) {
     if (h.field_of_role[static_cast<int>(r)] < 0) {
-      PLUMB_THROW(name << ":" << fields_line << ": FIELDS lacks x, y or z");
+      PLUMB_THROW(name << ":" << hl.fields_line << ": FIELDS lacks x, y or z");
     }
   }
   // Normals only as a complete triple; a lone normal_x is treated as an unknown field.
@@ -221,22 +231,34 @@ Header parse_header(const char* data, std::size_t size, const std::string& name)
     h.field_of_role[static_cast<int>(Role::kNormalY)] = -1;
     h.field_of_role[static_cast<int>(Role::kNormalZ)] = -1;
   }
+}
 
-  if (!have_width && !have_points) PLUMB_THROW(name << ":" << dl << ": header has neither WIDTH nor POINTS");
-  if (!have_width) {
-    width = points;
+// WIDTH x HEIGHT, or POINTS without WIDTH (HEIGHT is then 1); both must agree when given.
+std::uint64_t point_count(const HeaderLines& hl, const std::string& name, std::size_t data_line) {
+  if (!hl.have_width && !hl.have_points) {
+    PLUMB_THROW(name << ":" << data_line << ": header has neither WIDTH nor POINTS");
+  }
+  std::uint64_t width = hl.width, height = hl.height;
+  if (!hl.have_width) {
+    width = hl.points;
     height = 1;
   }
-  (void)have_height;
   if (height != 0 && width > std::numeric_limits<std::uint64_t>::max() / height) {
-    PLUMB_THROW(name << ":" << width_line << ": WIDTH " << width << " x HEIGHT " << height << " overflows");
+    PLUMB_THROW(name << ":" << hl.width_line << ": WIDTH " << width << " x HEIGHT " << height << " overflows");
   }
   const std::uint64_t wh = width * height;
-  if (have_points && points != wh) {
-    PLUMB_THROW(name << ":" << points_line << ": POINTS " << points << " does not match WIDTH x HEIGHT = " << width
-                     << " x " << height << " = " << wh);
+  if (hl.have_points && hl.points != wh) {
+    PLUMB_THROW(name << ":" << hl.points_line << ": POINTS " << hl.points << " does not match WIDTH x HEIGHT = "
+                     << width << " x " << height << " = " << wh);
   }
-  h.num_points = wh;
+  return wh;
+}
+
+Header parse_header(const char* data, std::size_t size, const std::string& name) {
+  Header h;
+  const HeaderLines hl = read_header_lines(data, size, name, h);
+  parse_fields(hl, name, h);
+  h.num_points = point_count(hl, name, h.data_line);
   return h;
 }
 

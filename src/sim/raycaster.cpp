@@ -456,27 +456,8 @@ inline float float_above(double x) {
   return static_cast<float>(x) * (1.0f + 2.0f * std::numeric_limits<float>::epsilon());
 }
 
-}  // namespace
-
-template <bool kAnyHit>
-RayHit RayCaster::traverse(const Vector3d& origin, const Vector3d& dir, double t_max) const {
-  RayHit result;
-  if (nodes_.empty()) return result;
-  if (!origin.allFinite() || !dir.allFinite() || !(t_max > 0.0)) return result;
-  // Watertight test set-up (Woop et al. 2013, sec. 3): the dominant axis becomes z, shear so the
-  // ray is the z axis.
-  int kz = 0;
-  dir.cwiseAbs().maxCoeff(&kz);
-  if (dir[kz] == 0.0) return result;
-  int kx = (kz + 1) % 3;
-  int ky = (kx + 1) % 3;
-  if (dir[kz] < 0.0) std::swap(kx, ky);
-  const double sx = dir[kx] / dir[kz];
-  const double sy = dir[ky] / dir[kz];
-  const double sz = 1.0 / dir[kz];
-  const double ox = origin[kx], oy = origin[ky], oz = origin[kz];
-
-  // Box test set-up in float: rows of the near and far planes by the sign of each component.
+/// Box test set-up in float: rows of the near and far planes by the sign of each component.
+inline BoxRay box_ray_of(const Vector3d& origin, const Vector3d& dir) {
   BoxRay box_ray;
   for (int k = 0; k < 3; ++k) {
     const float o = static_cast<float>(origin[k]);
@@ -492,6 +473,68 @@ RayHit RayCaster::traverse(const Vector3d& origin, const Vector3d& dir, double t
     box_ray.near_row[k] = 2 * k + (inv >= 0.0f ? 0 : 1);
     box_ray.far_row[k] = 2 * k + (inv >= 0.0f ? 1 : 0);
   }
+  return box_ray;
+}
+
+/// A ray as the watertight triangle test sees it: axes kx, ky, kz, the shear and the origin.
+struct ShearedRay {
+  int kx, ky, kz;
+  double sx, sy, sz;
+  double ox, oy, oz;
+};
+
+/// False for a zero direction.
+inline bool shear_ray(const Vector3d& origin, const Vector3d& dir, ShearedRay& r) {
+  // Watertight test set-up (Woop et al. 2013, sec. 3): the dominant axis becomes z, shear so the
+  // ray is the z axis.
+  int kz = 0;
+  dir.cwiseAbs().maxCoeff(&kz);
+  if (dir[kz] == 0.0) return false;
+  int kx = (kz + 1) % 3;
+  int ky = (kx + 1) % 3;
+  if (dir[kz] < 0.0) std::swap(kx, ky);
+  r.kx = kx;
+  r.ky = ky;
+  r.kz = kz;
+  r.sx = dir[kx] / dir[kz];
+  r.sy = dir[ky] / dir[kz];
+  r.sz = 1.0 / dir[kz];
+  r.ox = origin[kx];
+  r.oy = origin[ky];
+  r.oz = origin[kz];
+  return true;
+}
+
+/// Distance along the ray to the triangle of the 9 coordinates `v` by the exact test (Woop et al.
+/// 2013, sec. 3) in double; 0 when the ray misses it.
+inline double watertight_distance(const double* v, const ShearedRay& r) {
+  const int kx = r.kx, ky = r.ky, kz = r.kz;
+  const double ax = v[kx] - r.ox, ay = v[ky] - r.oy, az = v[kz] - r.oz;
+  const double bx = v[3 + kx] - r.ox, by = v[3 + ky] - r.oy, bz = v[3 + kz] - r.oz;
+  const double cx = v[6 + kx] - r.ox, cy = v[6 + ky] - r.oy, cz = v[6 + kz] - r.oz;
+  const double Ax = ax - r.sx * az, Ay = ay - r.sy * az;
+  const double Bx = bx - r.sx * bz, By = by - r.sy * bz;
+  const double Cx = cx - r.sx * cz, Cy = cy - r.sy * cz;
+  const double U = Cx * By - Cy * Bx;
+  const double V = Ax * Cy - Ay * Cx;
+  const double W = Bx * Ay - By * Ax;
+  if ((U < 0.0 || V < 0.0 || W < 0.0) && (U > 0.0 || V > 0.0 || W > 0.0)) return 0.0;
+  const double det = U + V + W;
+  if (det == 0.0) return 0.0;
+  const double T = U * (r.sz * az) + V * (r.sz * bz) + W * (r.sz * cz);
+  return T / det;
+}
+
+}  // namespace
+
+template <bool kAnyHit>
+RayHit RayCaster::traverse(const Vector3d& origin, const Vector3d& dir, double t_max) const {
+  RayHit result;
+  if (nodes_.empty()) return result;
+  if (!origin.allFinite() || !dir.allFinite() || !(t_max > 0.0)) return result;
+  ShearedRay sheared;
+  if (!shear_ray(origin, dir, sheared)) return result;
+  const BoxRay box_ray = box_ray_of(origin, dir);
   double best = t_max;
   float best_f = float_above(best);
   std::uint32_t best_slot = ~0u;
@@ -523,21 +566,7 @@ RayHit RayCaster::traverse(const Vector3d& origin, const Vector3d& dir, double t
       const int s = order[i];
       if (t_near[s] > best_f) break;  // behind a hit found in this node
       const std::uint32_t slot = nd.child[s] & ~kTriangleBit;
-      const double* v = leaf_vertices_.data() + 9 * static_cast<std::size_t>(slot);
-      const double ax = v[kx] - ox, ay = v[ky] - oy, az = v[kz] - oz;
-      const double bx = v[3 + kx] - ox, by = v[3 + ky] - oy, bz = v[3 + kz] - oz;
-      const double cx = v[6 + kx] - ox, cy = v[6 + ky] - oy, cz = v[6 + kz] - oz;
-      const double Ax = ax - sx * az, Ay = ay - sy * az;
-      const double Bx = bx - sx * bz, By = by - sy * bz;
-      const double Cx = cx - sx * cz, Cy = cy - sy * cz;
-      const double U = Cx * By - Cy * Bx;
-      const double V = Ax * Cy - Ay * Cx;
-      const double W = Bx * Ay - By * Ax;
-      if ((U < 0.0 || V < 0.0 || W < 0.0) && (U > 0.0 || V > 0.0 || W > 0.0)) continue;
-      const double det = U + V + W;
-      if (det == 0.0) continue;
-      const double T = U * (sz * az) + V * (sz * bz) + W * (sz * cz);
-      const double t = T / det;
+      const double t = watertight_distance(leaf_vertices_.data() + 9 * static_cast<std::size_t>(slot), sheared);
       if (!(t > 0.0) || !(t < best)) continue;
       best = t;
       best_f = float_above(best);
@@ -599,14 +628,19 @@ RayHit RayCaster::traverse(const Vector3d& origin, const Vector3d& dir, double t
     if (!found) break;
   }
   if (best_slot == ~0u) return result;
-  const double* v = leaf_vertices_.data() + 9 * static_cast<std::size_t>(best_slot);
+  return hit_of(best_slot, best, dir);
+}
+
+RayHit RayCaster::hit_of(std::uint32_t slot, double range, const Vector3d& dir) const {
+  RayHit result;
+  const double* v = leaf_vertices_.data() + 9 * static_cast<std::size_t>(slot);
   const Vector3d p0(v[0], v[1], v[2]), p1(v[3], v[4], v[5]), p2(v[6], v[7], v[8]);
   Vector3d n = (p1 - p0).cross(p2 - p0);
   const double len = n.norm();
   n = len > 0.0 ? Vector3d(n / len) : Vector3d(-dir);
   if (n.dot(dir) > 0.0) n = -n;
-  result.range = best;
-  result.triangle = leaf_triangle_[best_slot];
+  result.range = range;
+  result.triangle = leaf_triangle_[slot];
   result.element = triangle_element_[result.triangle];
   result.normal = n;
   return result;

@@ -211,18 +211,25 @@ std::vector<Vector2d> plan_path(const OccupancyGrid& g, const std::vector<float>
   return path;
 }
 
-Route plan_auto_route(const OccupancyGrid& g, const RouteSettings& s) {
-  PLUMB_CHECK(s.max_waypoints >= 2, "plan_auto_route: max_waypoints must be at least 2, got " << s.max_waypoints);
-  const std::vector<float> clr = clearance_map(g);
+namespace {
+
+/// The cells of the largest 8-connected region the robot may occupy (clearance >= min_clearance):
+/// region label per cell (-1 = none) and the label of the largest.
+struct DrivableRegion {
+  std::vector<int> region;
+  int best = -1;
+};
+
+DrivableRegion largest_drivable_region(const OccupancyGrid& g, const std::vector<float>& clr, double min_clearance) {
   const std::size_t n = g.cells.size();
-  // Largest 8-connected region of cells the robot may occupy.
-  std::vector<int> region(n, -1);
-  int best_region = -1;
+  DrivableRegion out;
+  std::vector<int>& region = out.region;
+  region.assign(n, -1);
   std::size_t best_size = 0;
   int num_regions = 0;
   std::vector<std::size_t> stack;
   for (std::size_t seed = 0; seed < n; ++seed) {
-    if (region[seed] >= 0 || clr[seed] < s.min_clearance) continue;
+    if (region[seed] >= 0 || clr[seed] < min_clearance) continue;
     std::size_t size = 0;
     region[seed] = num_regions;
     stack.assign(1, seed);
@@ -236,7 +243,7 @@ Route plan_auto_route(const OccupancyGrid& g, const RouteSettings& s) {
         for (int dx = -1; dx <= 1; ++dx) {
           if (!g.in_bounds(ix + dx, iy + dy)) continue;
           const std::size_t j = g.index(ix + dx, iy + dy);
-          if (region[j] >= 0 || clr[j] < s.min_clearance) continue;
+          if (region[j] >= 0 || clr[j] < min_clearance) continue;
           region[j] = num_regions;
           stack.push_back(j);
         }
@@ -244,16 +251,22 @@ Route plan_auto_route(const OccupancyGrid& g, const RouteSettings& s) {
     }
     if (size > best_size) {
       best_size = size;
-      best_region = num_regions;
+      out.best = num_regions;
     }
     ++num_regions;
   }
-  PLUMB_CHECK(best_region >= 0, "plan_auto_route: no free cell with clearance " << s.min_clearance
-                                                                                << " m (the free space is too narrow)");
+  return out;
+}
+
+/// Places of the region the route visits.
+std::vector<Vector2d> route_waypoints(const OccupancyGrid& g, const std::vector<float>& clr,
+                                      const DrivableRegion& drivable, const RouteSettings& s) {
+  const std::size_t n = g.cells.size();
+  const std::vector<int>& region = drivable.region;
   // Waypoints: clearance maxima, each suppressing its surroundings.
   std::vector<std::size_t> order;
   for (std::size_t i = 0; i < n; ++i) {
-    if (region[i] == best_region && clr[i] >= s.min_waypoint_clearance) order.push_back(i);
+    if (region[i] == drivable.best && clr[i] >= s.min_waypoint_clearance) order.push_back(i);
   }
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return clr[a] > clr[b]; });
   auto center_of = [&](std::size_t i) {
@@ -276,7 +289,7 @@ Route plan_auto_route(const OccupancyGrid& g, const RouteSettings& s) {
     double best = 0.0;
     std::size_t best_i = n;
     for (std::size_t i = 0; i < n; ++i) {
-      if (region[i] != best_region) continue;
+      if (region[i] != drivable.best) continue;
       double d = kInf;
       for (const Vector2d& w : waypoints) d = std::min(d, (center_of(i) - w).norm());
       if (waypoints.empty()) d = clr[i];
@@ -288,19 +301,13 @@ Route plan_auto_route(const OccupancyGrid& g, const RouteSettings& s) {
     if (best_i == n || (!waypoints.empty() && best < 2.0 * g.resolution)) break;
     waypoints.push_back(center_of(best_i));
   }
-  PLUMB_CHECK(waypoints.size() >= 2, "plan_auto_route: the free space holds fewer than two separate places");
-  // Paths between all pairs, then a short tour.
-  const std::size_t k = waypoints.size();
-  std::vector<std::vector<std::vector<Vector2d>>> paths(k, std::vector<std::vector<Vector2d>>(k));
-  std::vector<std::vector<double>> dist(k, std::vector<double>(k, 0.0));
-  for (std::size_t a = 0; a < k; ++a) {
-    for (std::size_t b = a + 1; b < k; ++b) {
-      paths[a][b] = plan_path(g, clr, waypoints[a], waypoints[b], s);
-      PLUMB_CHECK(!paths[a][b].empty(), "plan_auto_route: waypoints in one region are not connected (internal)");
-      paths[b][a] = std::vector<Vector2d>(paths[a][b].rbegin(), paths[a][b].rend());
-      dist[a][b] = dist[b][a] = polyline_length(paths[a][b], false);
-    }
-  }
+  return waypoints;
+}
+
+/// A short closed tour through all places given their pairwise distances, starting at place 0:
+/// nearest neighbour, then 2-opt.
+std::vector<std::size_t> short_tour(const std::vector<std::vector<double>>& dist) {
+  const std::size_t k = dist.size();
   std::vector<std::size_t> tour{0};
   std::vector<bool> used(k, false);
   used[0] = true;
@@ -330,6 +337,32 @@ Route plan_auto_route(const OccupancyGrid& g, const RouteSettings& s) {
       }
     }
   }
+  return tour;
+}
+
+}  // namespace
+
+Route plan_auto_route(const OccupancyGrid& g, const RouteSettings& s) {
+  PLUMB_CHECK(s.max_waypoints >= 2, "plan_auto_route: max_waypoints must be at least 2, got " << s.max_waypoints);
+  const std::vector<float> clr = clearance_map(g);
+  const DrivableRegion drivable = largest_drivable_region(g, clr, s.min_clearance);
+  PLUMB_CHECK(drivable.best >= 0, "plan_auto_route: no free cell with clearance "
+                                      << s.min_clearance << " m (the free space is too narrow)");
+  const std::vector<Vector2d> waypoints = route_waypoints(g, clr, drivable, s);
+  PLUMB_CHECK(waypoints.size() >= 2, "plan_auto_route: the free space holds fewer than two separate places");
+  // Paths between all pairs, then a short tour.
+  const std::size_t k = waypoints.size();
+  std::vector<std::vector<std::vector<Vector2d>>> paths(k, std::vector<std::vector<Vector2d>>(k));
+  std::vector<std::vector<double>> dist(k, std::vector<double>(k, 0.0));
+  for (std::size_t a = 0; a < k; ++a) {
+    for (std::size_t b = a + 1; b < k; ++b) {
+      paths[a][b] = plan_path(g, clr, waypoints[a], waypoints[b], s);
+      PLUMB_CHECK(!paths[a][b].empty(), "plan_auto_route: waypoints in one region are not connected (internal)");
+      paths[b][a] = std::vector<Vector2d>(paths[a][b].rbegin(), paths[a][b].rend());
+      dist[a][b] = dist[b][a] = polyline_length(paths[a][b], false);
+    }
+  }
+  const std::vector<std::size_t> tour = short_tour(dist);
   Route route;
   for (std::size_t i = 0; i < k; ++i) {
     route.waypoints.push_back(waypoints[tour[i]]);

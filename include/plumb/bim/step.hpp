@@ -104,6 +104,8 @@ class StepFile {
   std::string where(std::uint32_t id) const;
 
  private:
+  class Parser;  ///< the indexing pass of parse() (defined in step.cpp)
+
   std::string name_;
   std::string buffer_;
   StepSchema schema_ = StepSchema::kUnknown;

@@ -136,6 +136,22 @@ class CorrelativeMap2D {
     std::vector<std::uint8_t> value;
     std::vector<std::uint8_t> allowed;  ///< 1 when the window holds an allowed translation
   };
+  /// One match() call's state and search (defined in correlative.cpp).
+  class Matcher;
+
+  // The constructor's stages, in order.
+  /// Origin, size and padding of the grid around the finite map points (and settings.bounds).
+  void place_grid(const std::vector<Vector2d>& map_points);
+  /// Per channel, the grid cells holding a map point.
+  std::vector<std::vector<std::uint8_t>> occupied_cells(const std::vector<Vector2d>& map_points,
+                                                        const std::vector<Vector2d>& map_normals) const;
+  /// Level 0's likelihood: a Gaussian stamp around every occupied cell.
+  void stamp_likelihood(const std::vector<std::vector<std::uint8_t>>& occupied);
+  /// Level 0's allowed translations.
+  void mark_allowed(const std::function<bool(const Vector2d&)>& allowed);
+  /// Levels 1.. from level 0.
+  void build_pyramid();
+
   /// Channel of a scan point whose normal (map frame) has angle `phi`; NaN = the any channel.
   int channel_of(double phi) const;
   std::size_t index(int ix, int iy) const {  // ix, iy in [-pad_, width_) x [-pad_, height_)

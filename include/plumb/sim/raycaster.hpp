@@ -89,6 +89,8 @@ class RayCaster {
  private:
   template <bool kAnyHit>
   RayHit traverse(const Vector3d& origin, const Vector3d& unit_dir, double t_max) const;
+  /// The hit of leaf slot `slot` at `range` along `dir`: its triangle, element and normal.
+  RayHit hit_of(std::uint32_t slot, double range, const Vector3d& dir) const;
   void build(const RayCasterSettings& settings);
 
   std::vector<Vector3d> vertices_;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "plumb/core/error.hpp"
@@ -164,6 +165,199 @@ class SacIaCandidates {
   std::vector<std::size_t> known_;
 };
 
+/// Usable points of a SAC-IA problem: finite, with a valid signature (samples and candidates), and
+/// every finite source point (scored).
+struct SacIaPoints {
+  std::vector<std::size_t> src_ids, tgt_ids, score_order;
+};
+
+inline SacIaPoints sac_ia_usable_points(const PointCloud& source, const std::vector<FpfhSignature>& source_features,
+                                        const PointCloud& target, const std::vector<FpfhSignature>& target_features) {
+  SacIaPoints out;
+  for (std::size_t i = 0; i < source.size(); ++i) {
+    if (!source.points[i].allFinite()) continue;
+    out.score_order.push_back(i);
+    if (fpfh_valid(source_features[i])) out.src_ids.push_back(i);
+  }
+  for (std::size_t j = 0; j < target.size(); ++j)
+    if (target.points[j].allFinite() && fpfh_valid(target_features[j])) out.tgt_ids.push_back(j);
+  return out;
+}
+
+/// Points within the Huber threshold m1 of the target (inliers) and their squared distances.
+struct SacIaInliers {
+  std::size_t count = 0;
+  double sum_sq = 0.0;
+};
+
+/// The score of a hypothesis: the source points, in score order, against the target.
+class SacIaScorer {
+ public:
+  SacIaScorer(const PointCloud& source, const KdTree3f& target_tree, const std::vector<std::size_t>& score_order,
+              const SacIaSettings& settings)
+      : source_(source),
+        target_tree_(target_tree),
+        score_order_(score_order),
+        m1_(settings.huber_threshold),
+        m1_sq_f_(static_cast<float>(m1_ * m1_)),
+        max_d_sq_(static_cast<float>(settings.max_correspondence_distance * settings.max_correspondence_distance)),
+        far_cost_(huber_penalty(settings.max_correspondence_distance, m1_)) {}
+
+  // Huber total (Liu et al. 2022, eq. 2, distances truncated at max_correspondence_distance) over
+  // score_order[begin, end), added to `total`; stops early once total >= bound (exact: every
+  // penalty is >= 0). Also counts the points within m1 (inliers) and their squared distances, so
+  // that the winner's statistics need no extra pass.
+  double score_range(const Eigen::Matrix3f& R, const Eigen::Vector3f& t, std::size_t begin, std::size_t end,
+                     double total, double bound, SacIaInliers& inliers) const {
+    for (std::size_t n = begin; n < end && total < bound; ++n) {
+      const auto nn = target_tree_.nearest(R * source_.points[score_order_[n]] + t, max_d_sq_);
+      if (!nn) {
+        total += far_cost_;
+        continue;
+      }
+      total += huber_penalty(std::sqrt(static_cast<double>(nn->dist_sq)), m1_);
+      if (nn->dist_sq < m1_sq_f_) {
+        ++inliers.count;
+        inliers.sum_sq += static_cast<double>(nn->dist_sq);
+      }
+    }
+    return total;
+  }
+
+ private:
+  const PointCloud& source_;
+  const KdTree3f& target_tree_;
+  const std::vector<std::size_t>& score_order_;
+  const double m1_;
+  const float m1_sq_f_;
+  const float max_d_sq_;
+  const double far_cost_;
+};
+
+/// Hypotheses of SAC-IA (Liu et al. 2022, sec. 1.2, steps 1 to 3 up to the score), and how many of
+/// them the best one found so far makes necessary.
+class SacIaSampler {
+ public:
+  SacIaSampler(const PointCloud& source, const PointCloud& target, const std::vector<std::size_t>& src_ids,
+               SacIaCandidates& candidates, const SacIaSettings& settings)
+      : source_(source),
+        target_(target),
+        src_ids_(src_ids),
+        candidates_(candidates),
+        settings_(settings),
+        s_(settings.num_samples),
+        m1_sq_(settings.huber_threshold * settings.huber_threshold),
+        min_sep_sq_(settings.min_sample_distance * settings.min_sample_distance),
+        sample_(s_),
+        P_(s_),
+        Q_(s_),
+        cp_(s_),
+        np_(s_) {}
+
+  /// The next hypothesis T_target_source, or none when its sample or pairs fail a test.
+  std::optional<Eigen::Isometry3d> next(Rng& rng) {
+    if (!draw_sample(rng)) return std::nullopt;
+    // Liu et al. 2022, sec. 1.2, SAC-IA step 2: one of the k most similar signatures at random.
+    for (std::size_t a = 0; a < s_; ++a) {
+      const std::uint32_t j = candidates_.draw(sample_[a], rng);
+      P_[a] = source_.points[src_ids_[sample_[a]]].cast<double>();
+      Q_[a] = target_.points[j].cast<double>();
+    }
+    // Pre-rejection: a rigid motion keeps every edge length of the sampled polygon.
+    bool similar = true;
+    const double edge_ratio = settings_.edge_similarity;
+    if (edge_ratio > 0.0) {
+      for (std::size_t a = 0; a < s_ && similar; ++a) {
+        const std::size_t b = (a + 1) % s_;
+        const double lp = (P_[a] - P_[b]).norm();
+        const double lq = (Q_[a] - Q_[b]).norm();
+        similar = std::min(lp, lq) >= edge_ratio * std::max(lp, lq);
+      }
+    }
+    if (!similar) return std::nullopt;
+    // Liu et al. 2022, sec. 1.2, SAC-IA step 3: closed form (the Huber score is the caller's).
+    HornAccumulator acc;
+    for (std::size_t a = 0; a < s_; ++a) acc.add(P_[a], Q_[a]);
+    const HornResult h = acc.solve();
+    if (!h.valid) return std::nullopt;
+    bool close = true;
+    for (std::size_t a = 0; a < s_ && close; ++a) close = (h.T_target_source * P_[a] - Q_[a]).squaredNorm() <= m1_sq_;
+    if (!close) return std::nullopt;
+    if (settings_.region_radius > 0.0 &&
+        (h.T_target_source.translation() - settings_.region_center).head<2>().norm() > settings_.region_radius) {
+      return std::nullopt;
+    }
+    if (!settings_.excluded.empty() && near_any(h.T_target_source, settings_.excluded, settings_.exclude_distance,
+                                                settings_.exclude_angle)) {
+      return std::nullopt;
+    }
+    return h.T_target_source;
+  }
+
+  // Early termination (RANSAC-style): w = the chance that the pair drawn for a sampled point is
+  // one the best hypothesis maps within m1, averaged over the points whose candidates are known;
+  // an all-correct set of s pairs then comes with probability about w^s per hypothesis.
+  /// Hypotheses needed with `best_T` the best so far; `needed` unchanged when that cannot be told.
+  double iterations_needed(const Eigen::Isometry3d& best_T, double needed) const {
+    double sum_good = 0.0;
+    std::size_t num_points = 0;
+    for (std::size_t a : candidates_.known_points()) {
+      const std::uint32_t* c = nullptr;
+      const std::size_t n = candidates_.get(a, c);
+      if (n == 0) continue;
+      const double* p = candidates_.probabilities(a);
+      const Vector3d x = best_T * source_.points[src_ids_[a]].cast<double>();
+      ++num_points;
+      for (std::size_t m = 0; m < n; ++m)
+        if ((x - target_.points[c[m]].cast<double>()).squaredNorm() < m1_sq_) sum_good += p[m];
+    }
+    if (settings_.confidence >= 1.0 || num_points == 0) return needed;
+    const double w = std::min(1.0, sum_good / static_cast<double>(num_points));
+    const double ws = std::pow(w, static_cast<double>(s_));
+    return ws >= 1.0 ? 1.0 : ws > 0.0 ? std::log(1.0 - settings_.confidence) / std::log1p(-ws)
+                                      : static_cast<double>(settings_.max_iterations);
+  }
+
+ private:
+  static constexpr int kMaxSampleAttempts = 100;
+
+  // Liu et al. 2022, sec. 1.2, SAC-IA step 1: samples pairwise farther apart than d (and with at
+  // least one candidate).
+  bool draw_sample(Rng& rng) {
+    bool ok = true;
+    for (std::size_t a = 0; a < s_ && ok; ++a) {
+      ok = false;
+      for (int attempt = 0; attempt < kMaxSampleAttempts && !ok; ++attempt) {
+        const std::size_t c = static_cast<std::size_t>(rng.uniform_index(src_ids_.size()));
+        const Vector3f& pc = source_.points[src_ids_[c]];
+        ok = true;
+        for (std::size_t b = 0; b < a && ok; ++b) {
+          ok = sample_[b] != c && (source_.points[src_ids_[sample_[b]]] - pc).squaredNorm() >= min_sep_sq_;
+        }
+        if (ok) {
+          np_[a] = candidates_.get(c, cp_[a]);
+          ok = np_[a] > 0;
+        }
+        if (ok) sample_[a] = c;
+      }
+    }
+    return ok;
+  }
+
+  const PointCloud& source_;
+  const PointCloud& target_;
+  const std::vector<std::size_t>& src_ids_;
+  SacIaCandidates& candidates_;
+  const SacIaSettings& settings_;
+  const std::size_t s_;
+  const double m1_sq_;
+  const double min_sep_sq_;
+  std::vector<std::size_t> sample_;  // positions in src_ids
+  std::vector<Vector3d> P_, Q_;
+  std::vector<const std::uint32_t*> cp_;  // candidates of each sample
+  std::vector<std::size_t> np_;           // and their number
+};
+
 }  // namespace detail
 
 inline SacIaResult align_sac_ia(const PointCloud& source, const std::vector<FpfhSignature>& source_features,
@@ -181,21 +375,15 @@ inline SacIaResult align_sac_ia(const PointCloud& source, const std::vector<Fpfh
   const std::size_t s = settings.num_samples;
 
   // Usable points: finite, with a valid signature.
-  std::vector<std::size_t> src_ids, tgt_ids, score_order;
-  for (std::size_t i = 0; i < source.size(); ++i) {
-    if (!source.points[i].allFinite()) continue;
-    score_order.push_back(i);
-    if (detail::fpfh_valid(source_features[i])) src_ids.push_back(i);
-  }
-  for (std::size_t j = 0; j < target.size(); ++j)
-    if (target.points[j].allFinite() && detail::fpfh_valid(target_features[j])) tgt_ids.push_back(j);
-  if (src_ids.size() < s || tgt_ids.size() < 3) return out;
+  detail::SacIaPoints points = detail::sac_ia_usable_points(source, source_features, target, target_features);
+  std::vector<std::size_t>& score_order = points.score_order;
+  if (points.src_ids.size() < s || points.tgt_ids.size() < 3) return out;
 
   // Liu et al. 2022, sec. 1.2, SAC-IA step 2: the k most similar target signatures, computed for a
   // source point when it is first sampled.
-  const std::size_t k = std::min(settings.k_correspondences, tgt_ids.size());
-  detail::SacIaCandidates candidates(source_features, src_ids, target_features, tgt_ids, k, settings.mutual_filter,
-                                     settings.similarity_weighted);
+  const std::size_t k = std::min(settings.k_correspondences, points.tgt_ids.size());
+  detail::SacIaCandidates candidates(source_features, points.src_ids, target_features, points.tgt_ids, k,
+                                     settings.mutual_filter, settings.similarity_weighted);
 
   Rng rng(settings.seed);
   // Score points in a fixed random order: its first points are the pre-scoring subset, and the
@@ -203,154 +391,44 @@ inline SacIaResult align_sac_ia(const PointCloud& source, const std::vector<Fpfh
   for (std::size_t i = score_order.size(); i > 1; --i)
     std::swap(score_order[i - 1], score_order[rng.uniform_index(i)]);
   const std::size_t num_pre = std::min(settings.num_prescore_points, score_order.size());
-
-  const double m1 = settings.huber_threshold;
-  const double m1_sq = m1 * m1;
-  const double max_d = settings.max_correspondence_distance;
-  const float max_d_sq = static_cast<float>(max_d * max_d);
-  const double far_cost = huber_penalty(max_d, m1);
-  const double min_sep_sq = settings.min_sample_distance * settings.min_sample_distance;
-  const double edge_ratio = settings.edge_similarity;
   const double pre_factor = 1.0 + settings.prescore_slack;
+  detail::SacIaSampler sampler(source, target, points.src_ids, candidates, settings);
+  const detail::SacIaScorer scorer(source, target_tree, score_order, settings);
 
   double best = std::numeric_limits<double>::infinity();
   double best_pre = std::numeric_limits<double>::infinity();
   Eigen::Isometry3d best_T = Eigen::Isometry3d::Identity();
+  detail::SacIaInliers best_inliers;
   double needed = static_cast<double>(settings.max_iterations);
-  std::vector<std::size_t> sample(s);   // positions in src_ids
-  std::vector<Vector3d> P(s), Q(s);
-  std::vector<const std::uint32_t*> cp(s);  // candidates of each sample
-  std::vector<std::size_t> np(s);           // and their number
-  constexpr int kMaxSampleAttempts = 100;
-
-  // Huber total (Liu et al. 2022, eq. 2, distances truncated at max_correspondence_distance) over
-  // score_order[begin, end), added to `total`; stops early once total >= bound (exact: every
-  // penalty is >= 0). Also counts the points within m1 (inliers) and their squared distances, so
-  // that the winner's statistics need no extra pass.
-  struct Inliers {
-    std::size_t count = 0;
-    double sum_sq = 0.0;
-  };
-  const float m1_sq_f = static_cast<float>(m1_sq);
-  auto score_range = [&](const Eigen::Matrix3f& R, const Eigen::Vector3f& t, std::size_t begin, std::size_t end,
-                         double total, double bound, Inliers& inliers) {
-    for (std::size_t n = begin; n < end && total < bound; ++n) {
-      const auto nn = target_tree.nearest(R * source.points[score_order[n]] + t, max_d_sq);
-      if (!nn) {
-        total += far_cost;
-        continue;
-      }
-      total += huber_penalty(std::sqrt(static_cast<double>(nn->dist_sq)), m1);
-      if (nn->dist_sq < m1_sq_f) {
-        ++inliers.count;
-        inliers.sum_sq += static_cast<double>(nn->dist_sq);
-      }
-    }
-    return total;
-  };
-  Inliers best_inliers;
-  // Early termination (RANSAC-style): w = the chance that the pair drawn for a sampled point is
-  // one the best hypothesis maps within m1, averaged over the points whose candidates are known;
-  // an all-correct set of s pairs then comes with probability about w^s per hypothesis.
-  auto update_needed = [&] {
-    double sum_good = 0.0;
-    std::size_t num_points = 0;
-    for (std::size_t a : candidates.known_points()) {
-      const std::uint32_t* c = nullptr;
-      const std::size_t n = candidates.get(a, c);
-      if (n == 0) continue;
-      const double* p = candidates.probabilities(a);
-      const Vector3d x = best_T * source.points[src_ids[a]].cast<double>();
-      ++num_points;
-      for (std::size_t m = 0; m < n; ++m)
-        if ((x - target.points[c[m]].cast<double>()).squaredNorm() < m1_sq) sum_good += p[m];
-    }
-    if (settings.confidence >= 1.0 || num_points == 0) return;
-    const double w = std::min(1.0, sum_good / static_cast<double>(num_points));
-    const double ws = std::pow(w, static_cast<double>(s));
-    needed = ws >= 1.0 ? 1.0 : ws > 0.0 ? std::log(1.0 - settings.confidence) / std::log1p(-ws)
-                                        : static_cast<double>(settings.max_iterations);
-  };
-
   int it = 0;
   for (; it < settings.max_iterations; ++it) {
     if (static_cast<double>(it) >= needed && std::isfinite(best)) {
       // Re-estimate with every pair computed so far (more points than when `needed` was set).
-      update_needed();
+      needed = sampler.iterations_needed(best_T, needed);
       if (static_cast<double>(it) >= needed) {
         out.converged = true;
         break;
       }
     }
-    // Liu et al. 2022, sec. 1.2, SAC-IA step 1: samples pairwise farther apart than d (and with at
-    // least one candidate).
-    bool ok = true;
-    for (std::size_t a = 0; a < s && ok; ++a) {
-      ok = false;
-      for (int attempt = 0; attempt < kMaxSampleAttempts && !ok; ++attempt) {
-        const std::size_t c = static_cast<std::size_t>(rng.uniform_index(src_ids.size()));
-        const Vector3f& pc = source.points[src_ids[c]];
-        ok = true;
-        for (std::size_t b = 0; b < a && ok; ++b) {
-          ok = sample[b] != c && (source.points[src_ids[sample[b]]] - pc).squaredNorm() >= min_sep_sq;
-        }
-        if (ok) {
-          np[a] = candidates.get(c, cp[a]);
-          ok = np[a] > 0;
-        }
-        if (ok) sample[a] = c;
-      }
-    }
-    if (!ok) continue;
-    // Liu et al. 2022, sec. 1.2, SAC-IA step 2: one of the k most similar signatures at random.
-    for (std::size_t a = 0; a < s; ++a) {
-      const std::uint32_t j = candidates.draw(sample[a], rng);
-      P[a] = source.points[src_ids[sample[a]]].cast<double>();
-      Q[a] = target.points[j].cast<double>();
-    }
-    // Pre-rejection: a rigid motion keeps every edge length of the sampled polygon.
-    bool similar = true;
-    if (edge_ratio > 0.0) {
-      for (std::size_t a = 0; a < s && similar; ++a) {
-        const std::size_t b = (a + 1) % s;
-        const double lp = (P[a] - P[b]).norm();
-        const double lq = (Q[a] - Q[b]).norm();
-        similar = std::min(lp, lq) >= edge_ratio * std::max(lp, lq);
-      }
-    }
-    if (!similar) continue;
-    // Liu et al. 2022, sec. 1.2, SAC-IA step 3: closed form, then the Huber score.
-    HornAccumulator acc;
-    for (std::size_t a = 0; a < s; ++a) acc.add(P[a], Q[a]);
-    const HornResult h = acc.solve();
-    if (!h.valid) continue;
-    bool close = true;
-    for (std::size_t a = 0; a < s && close; ++a) close = (h.T_target_source * P[a] - Q[a]).squaredNorm() <= m1_sq;
-    if (!close) continue;
-    if (settings.region_radius > 0.0 &&
-        (h.T_target_source.translation() - settings.region_center).head<2>().norm() > settings.region_radius) {
-      continue;
-    }
-    if (!settings.excluded.empty() && detail::near_any(h.T_target_source, settings.excluded, settings.exclude_distance,
-                                                       settings.exclude_angle)) {
-      continue;
-    }
+    const std::optional<Eigen::Isometry3d> T = sampler.next(rng);
+    if (!T) continue;
+    // Liu et al. 2022, sec. 1.2, SAC-IA step 3: the Huber score, first on the pre-scoring subset.
     ++out.num_scored;
-    const Eigen::Matrix3f R = h.T_target_source.linear().cast<float>();
-    const Eigen::Vector3f t = h.T_target_source.translation().cast<float>();
+    const Eigen::Matrix3f R = T->linear().cast<float>();
+    const Eigen::Vector3f t = T->translation().cast<float>();
     const double pre_bound = std::min(best, std::isfinite(best_pre) ? pre_factor * best_pre : best);
-    Inliers inliers;
-    const double pre = score_range(R, t, 0, num_pre, 0.0, pre_bound, inliers);
+    detail::SacIaInliers inliers;
+    const double pre = scorer.score_range(R, t, 0, num_pre, 0.0, pre_bound, inliers);
     if (!(pre <= pre_factor * best_pre) && std::isfinite(best_pre)) continue;  // not promising
     if (!(pre < best)) continue;
     ++out.num_fully_scored;
-    const double total = score_range(R, t, num_pre, score_order.size(), pre, best, inliers);
+    const double total = scorer.score_range(R, t, num_pre, score_order.size(), pre, best, inliers);
     if (!(total < best)) continue;  // (a hypothesis that gets here was scored on every point)
     best = total;
     best_inliers = inliers;
     best_pre = pre;
-    best_T = h.T_target_source;
-    update_needed();
+    best_T = *T;
+    needed = sampler.iterations_needed(best_T, needed);
   }
   out.iterations = it;
   out.num_feature_queries = candidates.num_known();

@@ -181,6 +181,75 @@ inline void min_max_sum(const float* x, std::size_t count, float& lo, float& hi,
   sum = (s[0] + s[1]) + (s[2] + s[3]);
 }
 
+/// Bounds of a node's points under construction.
+template <int Dim>
+struct KdBuildBox {
+  float lo[Dim];
+  float hi[Dim];
+  float sum[Dim];  // of the coordinates, for the mean split
+};
+
+/// The tight box of points [begin, end) of the coordinate columns c.
+template <int Dim>
+inline KdBuildBox<Dim> kd_tight_box(const float* const* c, std::uint32_t begin, std::uint32_t end) {
+  KdBuildBox<Dim> box;
+  for (int k = 0; k < Dim; ++k) {
+    box.lo[k] = std::numeric_limits<float>::infinity();
+    box.hi[k] = -std::numeric_limits<float>::infinity();
+    min_max_sum(c[k] + begin, end - begin, box.lo[k], box.hi[k], box.sum[k]);
+  }
+  return box;
+}
+
+/// The box of a child [begin, end) of a node split along `dim`. A child that will be a leaf needs
+/// only its bound along `dim` (for this node's lo / hi).
+template <int Dim>
+inline KdBuildBox<Dim> kd_child_box(const float* const* c, std::uint32_t begin, std::uint32_t end, int dim,
+                                    std::size_t leaf_size) {
+  if (end - begin > leaf_size) return kd_tight_box<Dim>(c, begin, end);
+  KdBuildBox<Dim> box{};
+  box.lo[dim] = std::numeric_limits<float>::infinity();
+  box.hi[dim] = -std::numeric_limits<float>::infinity();
+  min_max_sum(c[dim] + begin, end - begin, box.lo[dim], box.hi[dim], box.sum[dim]);
+  return box;
+}
+
+/// Widest dimension of the (tight) bounding box, and its extent.
+template <int Dim>
+inline int kd_widest_dim(const KdBuildBox<Dim>& box, float& extent) {
+  int dim = 0;
+  extent = box.hi[0] - box.lo[0];
+  for (int k = 1; k < Dim; ++k) {
+    const float e = box.hi[k] - box.lo[k];
+    if (e > extent) {
+      extent = e;
+      dim = k;
+    }
+  }
+  return dim;
+}
+
+/// Branch-free out-of-place partition of points [begin, end) of columns c (and ids) on coordinate
+/// `dim` < split: every point is written to the next free slot of its side in columns s (and
+/// out_ids), left from the front, right from the back. Returns the first right slot.
+template <int Dim>
+inline std::uint32_t kd_partition(const float* const* c, float* const* s, const std::uint32_t* ids,
+                                  std::uint32_t* out_ids, int dim, float split, std::uint32_t begin,
+                                  std::uint32_t end) {
+  const float* cd = c[dim];
+  std::uint32_t num_left = 0;
+  std::uint32_t last = end - 1;
+  for (std::uint32_t src = begin; src < end; ++src) {
+    const bool is_left = cd[src] < split;
+    const std::uint32_t pos = is_left ? begin + num_left : last;
+    for (int k = 0; k < Dim; ++k) s[k][pos] = c[k][src];
+    out_ids[pos] = ids[src];
+    num_left += is_left ? 1 : 0;
+    last -= is_left ? 0 : 1;
+  }
+  return begin + num_left;
+}
+
 }  // namespace detail
 
 template <int Dim>
@@ -199,25 +268,12 @@ void KdTree<Dim>::build() {
   }
   std::uint32_t* id_buf[2] = {ids_.data(), other_ids.get()};
 
-  struct Box {
-    float lo[Dim];
-    float hi[Dim];
-    float sum[Dim];  // of the coordinates, for the mean split
-  };
+  using Box = detail::KdBuildBox<Dim>;
   struct Task {
     std::uint32_t begin, end, parent, depth;
     bool is_right;
     int buf;
     Box box;
-  };
-  auto tight_box = [&](float* const* c, std::uint32_t begin, std::uint32_t end) {
-    Box box;
-    for (int k = 0; k < Dim; ++k) {
-      box.lo[k] = std::numeric_limits<float>::infinity();
-      box.hi[k] = -std::numeric_limits<float>::infinity();
-      detail::min_max_sum(c[k] + begin, end - begin, box.lo[k], box.hi[k], box.sum[k]);
-    }
-    return box;
   };
 
   nodes_.clear();
@@ -239,7 +295,7 @@ void KdTree<Dim>::build() {
   std::vector<Task> stack;
   stack.reserve(64);
   Task root{0, static_cast<std::uint32_t>(n), 0, 0, false, 0,
-            tight_box(cols[0], 0, static_cast<std::uint32_t>(n))};
+            detail::kd_tight_box<Dim>(cols[0], 0, static_cast<std::uint32_t>(n))};
   max_depth_ = 0;
   for (int k = 0; k < Dim; ++k) {
     box_lo_[k] = root.box.lo[k];
@@ -259,16 +315,8 @@ void KdTree<Dim>::build() {
       continue;
     }
 
-    // Widest dimension of the (tight) bounding box.
-    int dim = 0;
-    float extent = t.box.hi[0] - t.box.lo[0];
-    for (int k = 1; k < Dim; ++k) {
-      const float e = t.box.hi[k] - t.box.lo[k];
-      if (e > extent) {
-        extent = e;
-        dim = k;
-      }
-    }
+    float extent = 0.0f;
+    const int dim = detail::kd_widest_dim<Dim>(t.box, extent);
     if (!(extent > 0.0f)) {  // all points coincide: one bucket, whatever its size
       nodes_[id].dim = kCoincidentLeaf;
       finish_leaf(t);
@@ -285,36 +333,12 @@ void KdTree<Dim>::build() {
     }
     if (!(split > lo) || split > hi) split = hi;
 
-    // Branch-free out-of-place partition on coordinate < split: every point is written to the
-    // next free slot of its side in the other buffer (left from the front, right from the back).
-    float* const* c = cols[t.buf];
+    // Partition into the other buffer, where the children find their points.
     float* const* s = cols[1 - t.buf];
-    const std::uint32_t* ids = id_buf[t.buf];
-    std::uint32_t* out_ids = id_buf[1 - t.buf];
-    const float* cd = c[dim];
-    std::uint32_t num_left = 0;
-    std::uint32_t last = t.end - 1;
-    for (std::uint32_t src = t.begin; src < t.end; ++src) {
-      const bool is_left = cd[src] < split;
-      const std::uint32_t pos = is_left ? t.begin + num_left : last;
-      for (int k = 0; k < Dim; ++k) s[k][pos] = c[k][src];
-      out_ids[pos] = ids[src];
-      num_left += is_left ? 1 : 0;
-      last -= is_left ? 0 : 1;
-    }
-    const std::uint32_t mid = t.begin + num_left;
-
-    // A child that will be a leaf needs only its bound along `dim` (for this node's lo / hi).
-    auto child_box = [&](std::uint32_t begin, std::uint32_t end) {
-      if (end - begin > leaf_size) return tight_box(s, begin, end);
-      Box box{};
-      box.lo[dim] = std::numeric_limits<float>::infinity();
-      box.hi[dim] = -std::numeric_limits<float>::infinity();
-      detail::min_max_sum(s[dim] + begin, end - begin, box.lo[dim], box.hi[dim], box.sum[dim]);
-      return box;
-    };
-    const Box left = child_box(t.begin, mid);
-    const Box right = child_box(mid, t.end);
+    const std::uint32_t mid =
+        detail::kd_partition<Dim>(cols[t.buf], s, id_buf[t.buf], id_buf[1 - t.buf], dim, split, t.begin, t.end);
+    const Box left = detail::kd_child_box<Dim>(s, t.begin, mid, dim, leaf_size);
+    const Box right = detail::kd_child_box<Dim>(s, mid, t.end, dim, leaf_size);
     Node& node = nodes_[id];
     node.a = 0;  // right child, patched when it is created
     node.b = 0;
