@@ -7,19 +7,15 @@
 // empty to start the map are skipped; the first usable one starts it (at gt.tum's pose of that
 // frame). A frame failing after others were processed still writes the set ("partial": true, exit 1).
 // Exit code 3 (kExitJobFailed) when no frame after the first was registered (LOAM or ICP): the set is
-// written, but the trajectory is the motion prediction alone.
+// written, but the trajectory is the motion prediction alone. The run itself is the library's
+// run_lio() (pipeline/lio_run.hpp); this file turns options into its settings and its report into files.
 
-#include <algorithm>
-#include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
-#include <optional>
 #include <sstream>
 #include <string>
-#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -28,10 +24,9 @@
 #include "registry.hpp"
 #include "run_output.hpp"
 #include "plumb/core/error.hpp"
-#include "plumb/eval/metrics.hpp"
 #include "plumb/io/frame_dump.hpp"
 #include "plumb/io/trajectory.hpp"
-#include "plumb/pipeline/hybrid_lio.hpp"
+#include "plumb/pipeline/lio_run.hpp"
 
 namespace plumb::cli {
 namespace {
@@ -50,19 +45,64 @@ struct LioOptions {
   bool icp_only = false;
 };
 
+// The report as `plumb lio` writes it (report.json, --json).
+nlohmann::json lio_report_json(const LioRunReport& r, const LioOptions& o, const HybridLioSettings& s) {
+  nlohmann::json j;
+  j["dump"] = o.dump_dir;
+  j["mode"] = to_string(s.mode);
+  j["frames"] = r.frames.size();
+  j["frames_requested"] = r.frames_requested;
+  j["first_frame"] = r.first_frame;
+  j["partial"] = r.partial;
+  if (r.partial) j["error"] = r.error;
+  j["warnings"] = r.warnings;
+  j["ground_truth"] = r.ground_truth_note;
+  j["map_window"] = o.map_window;
+  j["icp_metric"] = to_string(s.icp_metric);
+  j["icp_keep_loam"] = s.icp_keep_loam;
+  j["frames_per_mode"] = {{"init", r.frames_in(LioFrameMode::kInit)},
+                          {"loam", r.frames_in(LioFrameMode::kLoam)},
+                          {"icp", r.frames_in(LioFrameMode::kIcp)},
+                          {"prediction", r.frames_in(LioFrameMode::kPrediction)},
+                          {"skipped", r.frames_in(LioFrameMode::kSkipped)}};
+  j["failures"] = {{"prediction_only", r.frames_in(LioFrameMode::kPrediction)},
+                   {"skipped", r.frames_in(LioFrameMode::kSkipped)},
+                   {"imu_gaps", r.imu_gaps},
+                   {"not_converged", r.not_converged},
+                   {"imu_samples_dropped", r.imu_samples_dropped}};
+  j["timing"] = {{"seconds", r.seconds_process},
+                 {"frames_per_second", r.frames_per_second},
+                 {"mean_ms", r.mean_seconds_process * 1e3},
+                 {"median_ms", r.median_seconds_process * 1e3},
+                 {"max_ms", r.max_seconds_process * 1e3}};
+  j["features"] = {{"mean_plane_points", r.mean_plane_points}, {"mean_structure_planes", r.mean_structure_planes}};
+  if (r.has_metrics) {
+    j["path_length"] = r.path_length;
+    j["end_error"] = r.end_error;
+    j["end_error_xy"] = r.end_error_xy;
+    if (r.rpe_pairs > 0) {
+      j["rpe_10m"] = {{"translation_mean", r.rpe_translation_mean},
+                      {"translation_rmse", r.rpe_translation_rmse},
+                      {"rotation_mean_deg", r.rpe_rotation_mean_deg},
+                      {"pairs", r.rpe_pairs}};
+    }
+    j["ape_rmse"] = r.ape_rmse;
+  }
+  return j;
+}
+
 void run(const LioOptions& o) {
   const LioMode mode = lio_mode_from_string(o.mode);
   const io::FrameDumpReader dump(o.dump_dir);
+  // Checked before the output directory too, naming the option.
   PLUMB_CHECK(dump.num_frames() > 0, o.dump_dir << ": the dump has no frame");
-  const bool imu_mode = mode != LioMode::kLoam;
-  PLUMB_CHECK(!imu_mode || dump.has_imu(), o.dump_dir << ": --mode " << o.mode << " needs imu.csv in the dump");
+  PLUMB_CHECK(mode == LioMode::kLoam || dump.has_imu(), o.dump_dir << ": --mode " << o.mode << " needs imu.csv in the dump");
   // Before the work: an unwritable or foreign output directory is found now.
   OutputDir out(o.out_dir, "lio", {"trajectory.tum", "report.json"}, o.overwrite, true);
 
-  HybridLioSettings s;
+  LioRunSettings settings;
+  HybridLioSettings& s = settings.lio;
   s.mode = mode;
-  s.T_base_lidar = dump.meta().T_base_lidar;
-  s.T_base_imu = dump.meta().T_base_imu;
   s.min_plane_points = o.min_plane_points;
   // A handful of points would start a map nothing can be matched to: wait for a real sweep.
   s.min_init_points = 100;
@@ -70,154 +110,13 @@ void run(const LioOptions& o) {
   s.icp_metric = icp_metric_from_string(o.icp_metric);
   if (o.icp_only) s.icp_keep_loam = false;
   s.edge_map.max_age = s.plane_map.max_age = s.point_map.max_age = static_cast<std::size_t>(o.map_window);
-  for (double e : dump.meta().lidar.elevations_rad) s.image.vertical_angles_deg.push_back(e * 180.0 / 3.14159265358979323846);
+  settings.max_frames = o.max_frames;
+  const LioRunReport r = run_lio(dump, settings);
+  print_warnings(r.warnings);
+  const std::size_t done = r.frames.size();  // frames_requested, or fewer when a frame failed
 
-  const std::size_t n = o.max_frames > 0 ? std::min(o.max_frames, dump.num_frames()) : dump.num_frames();
-  Trajectory gt;
-  bool has_gt = false;
-  std::vector<std::string> warnings;
-  if (dump.has_ground_truth()) {
-    gt = dump.ground_truth();
-    has_gt = gt.size() >= n;
-    if (!has_gt) {
-      warnings.push_back(o.dump_dir + "/gt.tum: " + std::to_string(gt.size()) + " poses for " + std::to_string(n) +
-                         " frames; no accuracy report (RPE, APE, end error) and the start pose is the identity");
-    }
-    for (std::size_t i = 0; has_gt && i < n; ++i) {
-      PLUMB_CHECK(!gt.has_stamps() || std::abs(gt.stamps[i] - dump.stamp(i)) < 1e-6,
-                  o.dump_dir << "/gt.tum: pose " << i << " has stamp " << gt.stamps[i] << ", frame " << i << " has "
-                             << dump.stamp(i) << " (gt.tum holds one pose per frame)");
-    }
-  }
-  print_warnings(warnings);
-  // Made at the first frame, and again at the next one while no frame has started the map: the
-  // start pose is that of the frame that starts it.
-  std::optional<HybridLio> lio;
-  std::size_t first_frame = n;
-
-  std::vector<io::ImuSample> imu;
-  if (imu_mode) imu = dump.imu();
-  std::size_t next_imu = 0;
-  const double sweep = dump.meta().lidar.rate_hz > 0.0 ? 1.0 / dump.meta().lidar.rate_hz : 0.1;
-
-  Trajectory est;
-  std::vector<LioFrameResult> frames;
-  frames.reserve(n);
-  std::size_t count[5] = {0, 0, 0, 0, 0};
-  std::size_t imu_gaps = 0, not_converged = 0;
-  double seconds = 0.0;
-  std::vector<double> ms;
-  std::size_t imu_dropped = 0;
-  std::string error;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double stamp = dump.stamp(i);
-    if (!lio) {
-      lio.emplace(has_gt ? gt.poses[i] : Eigen::Isometry3d::Identity(), s);
-      // A new estimator after a skipped first frame gets the IMU from one sweep before this frame on
-      // (the first one gets all of it, as it always did).
-      if (i > 0) next_imu = static_cast<std::size_t>(
-          std::lower_bound(imu.begin(), imu.end(), stamp - sweep,
-                           [](const io::ImuSample& a, double t) { return a.stamp < t; }) -
-          imu.begin());
-    }
-    // The IMU up to the end of this frame's sweep (what a live system has when the sweep is complete).
-    while (next_imu < imu.size() && imu[next_imu].stamp <= stamp + sweep + 0.02) {
-      lio->add_imu(imu[next_imu]);
-      ++next_imu;
-    }
-    LioFrameResult r;
-    try {
-      const PointCloud frame = dump.frame(i);
-      r = lio->process(frame, stamp);
-    } catch (const std::exception& e) {
-      // What was computed so far is kept and written marked partial.
-      if (first_frame == n) throw;
-      error = "frame " + std::to_string(i) + ": " + e.what();
-      break;
-    }
-    if (lio->initialized() && first_frame == n) first_frame = i;
-    if (!lio->initialized()) {
-      imu_dropped += lio->num_imu_dropped();
-      lio.reset();
-    }
-    ++count[static_cast<int>(r.mode)];
-    imu_gaps += r.imu_gap ? 1 : 0;
-    not_converged += r.status == Status::kNotConverged ? 1 : 0;
-    seconds += r.seconds;
-    ms.push_back(r.seconds * 1e3);
-    if (r.mode != LioFrameMode::kSkipped) est.push_back(stamp, r.T_world_base);
-    frames.push_back(r);
-  }
-  PLUMB_CHECK(first_frame < n, o.dump_dir << ": none of the " << n << " frames has the " << s.min_init_points
-                                          << " points needed to start the map (are the frame files empty?)");
-  imu_dropped += lio->num_imu_dropped();
-  const bool partial = !error.empty();
-  const std::size_t done = frames.size();  // n, or fewer when a frame failed
-
-  io::write_tum(est, out.staging() + "/trajectory.tum");
-
-  nlohmann::json j;
-  j["dump"] = o.dump_dir;
-  j["mode"] = to_string(mode);
-  j["frames"] = done;
-  j["frames_requested"] = n;
-  j["first_frame"] = first_frame;
-  j["partial"] = partial;
-  if (partial) j["error"] = error;
-  j["warnings"] = warnings;
-  j["ground_truth"] = has_gt ? "used" : (dump.has_ground_truth() ? "too_short" : "absent");
-  j["map_window"] = o.map_window;
-  j["icp_metric"] = to_string(s.icp_metric);
-  j["icp_keep_loam"] = s.icp_keep_loam;
-  j["frames_per_mode"] = {{"init", count[static_cast<int>(LioFrameMode::kInit)]},
-                          {"loam", count[static_cast<int>(LioFrameMode::kLoam)]},
-                          {"icp", count[static_cast<int>(LioFrameMode::kIcp)]},
-                          {"prediction", count[static_cast<int>(LioFrameMode::kPrediction)]},
-                          {"skipped", count[static_cast<int>(LioFrameMode::kSkipped)]}};
-  j["failures"] = {{"prediction_only", count[static_cast<int>(LioFrameMode::kPrediction)]},
-                   {"skipped", count[static_cast<int>(LioFrameMode::kSkipped)]},
-                   {"imu_gaps", imu_gaps},
-                   {"not_converged", not_converged},
-                   {"imu_samples_dropped", imu_dropped}};
-  std::vector<double> sorted = ms;
-  std::sort(sorted.begin(), sorted.end());
-  j["timing"] = {{"seconds", seconds},
-                 {"frames_per_second", seconds > 0.0 ? static_cast<double>(done) / seconds : 0.0},
-                 {"mean_ms", sorted.empty() ? 0.0 : seconds * 1e3 / static_cast<double>(sorted.size())},
-                 {"median_ms", sorted.empty() ? 0.0 : sorted[sorted.size() / 2]},
-                 {"max_ms", sorted.empty() ? 0.0 : sorted.back()}};
-  std::size_t planes = 0, structure = 0;
-  for (const LioFrameResult& r : frames) {
-    planes += r.num_plane_points;
-    structure += r.num_structure_planes;
-  }
-  j["features"] = {{"mean_plane_points", done > 0 ? static_cast<double>(planes) / static_cast<double>(done) : 0.0},
-                   {"mean_structure_planes", done > 0 ? static_cast<double>(structure) / static_cast<double>(done) : 0.0}};
-  if (has_gt && est.size() >= 2) {
-    Trajectory ref;
-    for (std::size_t i = 0; i < done; ++i) {
-      if (frames[i].mode != LioFrameMode::kSkipped) ref.push_back(gt.stamps[i], gt.poses[i]);
-    }
-    const std::vector<double> len = eval::path_lengths(ref);
-    j["path_length"] = len.back();
-    const Vector3d end = est.poses.back().translation() - ref.poses.back().translation();
-    j["end_error"] = end.norm();
-    j["end_error_xy"] = end.head<2>().norm();
-    eval::RpeSettings rs;
-    rs.delta = 10.0;
-    rs.unit = eval::DeltaUnit::kMeters;
-    rs.pairs_along = eval::PathSource::kReference;
-    const eval::RpeResult rpe = eval::compute_rpe(est, ref, rs);
-    if (rpe.status == Status::kOk) {
-      j["rpe_10m"] = {{"translation_mean", rpe.translation.stats.mean},
-                      {"translation_rmse", rpe.translation.stats.rmse},
-                      {"rotation_mean_deg", rpe.rotation_deg.stats.mean},
-                      {"pairs", rpe.translation.stats.count}};
-    }
-    eval::ApeSettings as;
-    as.align = eval::AlignMode::kNone;
-    j["ape_rmse"] = eval::compute_ape(est, ref, as).translation.stats.rmse;
-  }
+  io::write_tum(r.trajectory, out.staging() + "/trajectory.tum");
+  const nlohmann::json j = lio_report_json(r, o, s);
   {
     std::ofstream file(out.staging() + "/report.json");
     file << j.dump(2) << '\n';
@@ -228,25 +127,23 @@ void run(const LioOptions& o) {
     std::cout << j.dump(2) << '\n';
   } else {
     std::printf("%zu frames (%s): %zu loam, %zu icp, %zu prediction-only, %zu skipped; %.1f frames/s\n", done,
-                to_string(mode), count[1], count[2], count[3], count[4],
-                seconds > 0.0 ? static_cast<double>(done) / seconds : 0.0);
-    if (j.contains("end_error")) {
-      std::printf("path %.1f m: end error %.3f m", j["path_length"].get<double>(), j["end_error"].get<double>());
-      if (j.contains("rpe_10m")) std::printf(", mean RPE over 10 m %.3f m", j["rpe_10m"]["translation_mean"].get<double>());
+                to_string(mode), r.frames_in(LioFrameMode::kLoam), r.frames_in(LioFrameMode::kIcp),
+                r.frames_in(LioFrameMode::kPrediction), r.frames_in(LioFrameMode::kSkipped), r.frames_per_second);
+    if (r.has_metrics) {
+      std::printf("path %.1f m: end error %.3f m", r.path_length, r.end_error);
+      if (r.rpe_pairs > 0) std::printf(", mean RPE over 10 m %.3f m", r.rpe_translation_mean);
       std::printf("\n");
     }
     std::printf("wrote %s/trajectory.tum, report.json\n", o.out_dir.c_str());
   }
-  PLUMB_CHECK(!partial, o.dump_dir << ": stopped at " << error << "; wrote the " << done << " of " << n
-                                   << " frames processed to " << o.out_dir << " (report.json: \"partial\": true)");
-  const std::size_t registered =
-      count[static_cast<int>(LioFrameMode::kLoam)] + count[static_cast<int>(LioFrameMode::kIcp)];
-  if (done >= 2 && registered == 0) {
+  PLUMB_CHECK(!r.partial, o.dump_dir << ": stopped at " << r.error << "; wrote the " << done << " of "
+                                     << r.frames_requested << " frames processed to " << o.out_dir
+                                     << " (report.json: \"partial\": true)");
+  if (done >= 2 && r.frames_in(LioFrameMode::kLoam) + r.frames_in(LioFrameMode::kIcp) == 0) {
     std::ostringstream os;
     os << o.dump_dir << ": no frame after the first was registered to the map ("
-       << count[static_cast<int>(LioFrameMode::kPrediction)] << " prediction-only, "
-       << count[static_cast<int>(LioFrameMode::kSkipped)] << " skipped); the trajectory written to " << o.out_dir
-       << " is the motion prediction alone";
+       << r.frames_in(LioFrameMode::kPrediction) << " prediction-only, " << r.frames_in(LioFrameMode::kSkipped)
+       << " skipped); the trajectory written to " << o.out_dir << " is the motion prediction alone";
     throw JobFailed(os.str());
   }
 }

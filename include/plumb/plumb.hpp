@@ -104,5 +104,6 @@
 #include "plumb/pipeline/bim_localizer.hpp"
 #include "plumb/pipeline/bim_odometry.hpp"
 #include "plumb/pipeline/hybrid_lio.hpp"
+#include "plumb/pipeline/lio_run.hpp"
 #include "plumb/pipeline/pose_composer.hpp"
 #include "plumb/pipeline/run.hpp"

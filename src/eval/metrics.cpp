@@ -23,6 +23,12 @@ void check_paired(const Trajectory& estimate, const Trajectory& reference, const
 
 double rotation_angle(const Matrix3d& R) { return so3::log(R).norm(); }
 
+// |a - b| over `axes`.
+double distance(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, PositionAxes axes) {
+  const Vector3d d = a.translation() - b.translation();
+  return axes == PositionAxes::kXY ? d.head<2>().norm() : d.norm();
+}
+
 ErrorSeries make_series(std::vector<double> values) {
   ErrorSeries series;
   if (!values.empty()) series.stats = compute_stats(values);
@@ -184,7 +190,7 @@ ApeResult compute_ape(const Trajectory& estimate, const Trajectory& reference, c
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Isometry3d& P = aligned.aligned.poses[i];
     const Eigen::Isometry3d& Q = reference.poses[i];
-    translation[i] = (P.translation() - Q.translation()).norm();
+    translation[i] = distance(P, Q, settings.axes);
     const Eigen::Isometry3d E = P.inverse() * Q;
     rotation[i] = rotation_angle(E.linear()) * kRadToDeg;
     full[i] = (E.matrix() - Eigen::Matrix4d::Identity()).norm();
@@ -250,11 +256,10 @@ RpeResult compute_rpe(const Trajectory& estimate, const Trajectory& reference, c
   return result;
 }
 
-std::vector<double> path_lengths(const Trajectory& trajectory) {
+std::vector<double> path_lengths(const Trajectory& trajectory, PositionAxes axes) {
   std::vector<double> lengths(trajectory.size(), 0.0);
   for (std::size_t i = 1; i < trajectory.size(); ++i) {
-    lengths[i] = lengths[i - 1] +
-                 (trajectory.poses[i].translation() - trajectory.poses[i - 1].translation()).norm();
+    lengths[i] = lengths[i - 1] + distance(trajectory.poses[i], trajectory.poses[i - 1], axes);
   }
   return lengths;
 }
@@ -263,7 +268,7 @@ std::vector<DriftSample> drift_at(const Trajectory& estimate, const Trajectory& 
                                   const std::vector<std::size_t>& indices, const DriftSettings& settings) {
   check_paired(estimate, reference, "drift_at");
   const std::vector<double> lengths =
-      path_lengths(settings.path == PathSource::kReference ? reference : estimate);
+      path_lengths(settings.path == PathSource::kReference ? reference : estimate, settings.axes);
   std::vector<DriftSample> samples;
   samples.reserve(indices.size());
   for (std::size_t index : indices) {
@@ -272,7 +277,7 @@ std::vector<DriftSample> drift_at(const Trajectory& estimate, const Trajectory& 
     DriftSample s;
     s.index = index;
     s.path_length = lengths[index];
-    s.error = (estimate.poses[index].translation() - reference.poses[index].translation()).norm();
+    s.error = distance(estimate.poses[index], reference.poses[index], settings.axes);
     s.drift_pct = s.path_length > 0.0 ? s.error / s.path_length * 100.0
                                       : std::numeric_limits<double>::quiet_NaN();
     samples.push_back(s);

@@ -6,12 +6,18 @@
 #include <cmath>
 #include <cctype>
 #include <limits>
+#include <memory>
+#include <optional>
 #include <set>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "plumb/bim/sample.hpp"
 #include "plumb/core/clock.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/core/sensor_data.hpp"
+#include "plumb/eval/metrics.hpp"
 
 namespace plumb {
 namespace {
@@ -79,55 +85,70 @@ PointCloud sample_bim_cloud(const bim::BimMesh& mesh, double spacing) {
   return bim::sample_surface(mesh, ss);
 }
 
-RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& mesh, const RunSettings& settings) {
-  PLUMB_CHECK(dump.num_frames() > 0, dump.dir() << ": the dump has no frame");
-  PLUMB_CHECK(dump.has_odometry(), dump.dir() << ": the dump has no odom.csv (wheel odometry is the front end's prior)");
-  PLUMB_CHECK(mesh.num_triangles() > 0, "run_bim_odometry: the model has no geometry");
-  RunReport report;
-  const OdometryInterpolator odom(dump.odometry());
-  const Eigen::Isometry3d T_base_lidar = dump.meta().T_base_lidar;
-
-  auto bim_cloud = std::make_shared<PointCloud>(sample_bim_cloud(mesh, settings.bim_spacing));
-  report.bim_points = bim_cloud->size();
-
-  const std::size_t n = settings.max_frames > 0 ? std::min(settings.max_frames, dump.num_frames()) : dump.num_frames();
-  report.frames_requested = n;
-  // The wheel odometry is the prior of every frame: a frame beyond its ends by more than one LiDAR
-  // period (a sample lost at the end of a recording is normal, a missing stretch is not) would be
-  // tracked with a frozen prior, so it is refused before any work.
-  {
-    const double rate = dump.meta().lidar.rate_hz;
-    const double tolerance = rate > 0.0 ? 1.0 / rate : 0.1;
-    const std::string odom_path = dump.dir() + "/odom.csv";
-    for (std::size_t i = 0; i < n; ++i) {
-      const double t = dump.stamp(i);
-      PLUMB_CHECK(t >= odom.first_stamp() - tolerance,
-                  odom_path << ": the wheel odometry starts at " << odom.first_stamp() << " s, after frame " << i
-                            << " (stamp " << t << " s; up to one LiDAR period, " << tolerance
-                            << " s, is tolerated)");
-      PLUMB_CHECK(t <= odom.last_stamp() + tolerance,
-                  odom_path << ": the wheel odometry ends at " << odom.last_stamp() << " s, before frame " << i
-                            << " (stamp " << t << " s) and the " << (n - 1 - i)
-                            << " frames after it (up to one LiDAR period, " << tolerance
-                            << " s, is tolerated; --max-frames " << i << " processes the frames it covers)");
-      if (t < odom.first_stamp() || t > odom.last_stamp()) ++report.odometry_clamped_frames;
-    }
-    if (report.odometry_clamped_frames > 0) {
-      report.warnings.push_back(odom_path + ": " + std::to_string(report.odometry_clamped_frames) +
-                                " frame(s) lie just outside the wheel odometry's span; their prior is the nearest sample");
-    }
+FrameGroundTruth read_frame_ground_truth(const io::FrameDumpReader& dump, std::size_t frames) {
+  FrameGroundTruth gt;
+  if (!dump.has_ground_truth()) return gt;
+  gt.poses = dump.ground_truth();
+  gt.used = gt.poses.size() >= frames;
+  gt.note = gt.used ? "used" : "too_short";
+  for (std::size_t i = 0; gt.used && i < frames; ++i) {
+    PLUMB_CHECK(!gt.poses.has_stamps() || std::abs(gt.poses.stamps[i] - dump.stamp(i)) < 1e-6,
+                dump.dir() << "/gt.tum: pose " << i << " has stamp " << gt.poses.stamps[i] << ", frame " << i
+                           << " has " << dump.stamp(i) << " (gt.tum holds one pose per frame)");
   }
-  auto frame_at = [&](std::size_t i) {
+  return gt;
+}
+
+namespace {
+
+// The wheel odometry is the prior of every frame: a frame beyond its ends by more than one LiDAR
+// period (a sample lost at the end of a recording is normal, a missing stretch is not) would be
+// tracked with a frozen prior, so it is refused before any work.
+void check_odometry_coverage(const io::FrameDumpReader& dump, const OdometryInterpolator& odom, std::size_t n,
+                             RunReport& report) {
+  const double rate = dump.meta().lidar.rate_hz;
+  const double tolerance = rate > 0.0 ? 1.0 / rate : 0.1;
+  const std::string odom_path = dump.dir() + "/odom.csv";
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t = dump.stamp(i);
+    PLUMB_CHECK(t >= odom.first_stamp() - tolerance,
+                odom_path << ": the wheel odometry starts at " << odom.first_stamp() << " s, after frame " << i
+                          << " (stamp " << t << " s; up to one LiDAR period, " << tolerance << " s, is tolerated)");
+    PLUMB_CHECK(t <= odom.last_stamp() + tolerance,
+                odom_path << ": the wheel odometry ends at " << odom.last_stamp() << " s, before frame " << i
+                          << " (stamp " << t << " s) and the " << (n - 1 - i)
+                          << " frames after it (up to one LiDAR period, " << tolerance
+                          << " s, is tolerated; --max-frames " << i << " processes the frames it covers)");
+    if (t < odom.first_stamp() || t > odom.last_stamp()) ++report.odometry_clamped_frames;
+  }
+  if (report.odometry_clamped_frames > 0) {
+    report.warnings.push_back(odom_path + ": " + std::to_string(report.odometry_clamped_frames) +
+                              " frame(s) lie just outside the wheel odometry's span; their prior is the nearest sample");
+  }
+}
+
+// Frame i of the dump, deskewed with the wheel odometry when the settings ask for it.
+struct FrameSource {
+  const io::FrameDumpReader& dump;
+  const OdometryInterpolator& odom;
+  bool deskew;
+
+  PointCloud operator()(std::size_t i) const {
     PointCloud f = dump.frame(i);
-    if (settings.deskew) {
-      deskew_frame(f, dump.stamp(i), T_base_lidar, [&](double t) { return odom.at(t).to_isometry(); });
+    if (deskew) {
+      deskew_frame(f, dump.stamp(i), dump.meta().T_base_lidar, [&](double t) { return odom.at(t).to_isometry(); });
     }
     return f;
-  };
+  }
+};
 
-  // Liu et al. 2022, sec. 1: the first frame in the BIM (kept for the first step of the loop).
-  std::optional<PointCloud> first_frame;
+// Liu et al. 2022, sec. 1: the first frame in the BIM, given or localized. Returns the first frame
+// when localizing read it, for the first step of the frame loop.
+std::optional<PointCloud> place_first_frame(const io::FrameDumpReader& dump, const bim::BimMesh& mesh,
+                                            const PointCloud& bim_cloud, const FrameSource& frame_at,
+                                            const RunSettings& settings, RunReport& report) {
   const auto t_loc = std::chrono::steady_clock::now();
+  std::optional<PointCloud> first_frame;
   if (settings.initial_pose) {
     report.T_bim_base0 = *settings.initial_pose;
   } else {
@@ -139,36 +160,23 @@ RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& 
                   "run_bim_odometry: the start hint must be finite and its radius > 0");
       hint = settings.start_hint->head<2>();
     }
-    const BimLocalizer localizer(mesh, *bim_cloud, settings.localizer);
-    report.localization = localizer.localize(*first_frame, T_base_lidar, hint, settings.start_hint_radius);
+    const BimLocalizer localizer(mesh, bim_cloud, settings.localizer);
+    report.localization = localizer.localize(*first_frame, dump.meta().T_base_lidar, hint, settings.start_hint_radius);
     report.localization_status = report.localization.status;
     report.T_bim_base0 = report.localization.T_bim_base;
   }
   report.seconds_localize = seconds_since(t_loc);
-  Trajectory gt;
-  if (dump.has_ground_truth()) {
-    gt = dump.ground_truth();
-    report.has_ground_truth = gt.size() >= n;
-    report.ground_truth_note = report.has_ground_truth ? "used" : "too_short";
-    if (!report.has_ground_truth) {
-      report.warnings.push_back(dump.dir() + "/gt.tum: " + std::to_string(gt.size()) + " poses for " +
-                                std::to_string(n) + " frames; no accuracy report (Table 2, APE) for this run");
-    }
-    for (std::size_t i = 0; report.has_ground_truth && i < n; ++i) {
-      PLUMB_CHECK(!gt.has_stamps() || std::abs(gt.stamps[i] - dump.stamp(i)) < 1e-6,
-                  dump.dir() << "/gt.tum: pose " << i << " has stamp " << gt.stamps[i] << ", frame " << i
-                             << " has " << dump.stamp(i) << " (gt.tum holds one pose per frame)");
-    }
-  }
-  if (report.has_ground_truth) {
-    report.initial_error_xy = horizontal_error(report.T_bim_base0, gt.poses[0]);
-    report.initial_error_yaw_deg = std::abs(std::remainder(yaw_of(report.T_bim_base0) - yaw_of(gt.poses[0]), 2 * M_PI)) * 180.0 / M_PI;
-  }
-  if (report.localization_status != Status::kOk) return report;
+  return first_frame;
+}
 
+// BimOdometry over frames [0, n): the three trajectories, the counts and the timing of the report.
+void track_frames(const io::FrameDumpReader& dump, const OdometryInterpolator& odom, const FrameSource& frame_at,
+                  std::shared_ptr<const PointCloud> bim_cloud, std::optional<PointCloud> first_frame,
+                  const RunSettings& settings, RunReport& report) {
+  const std::size_t n = report.frames_requested;
   BimOdometrySettings os = settings.odometry;
-  os.T_base_lidar = T_base_lidar;
-  BimOdometry odometry(bim_cloud, report.T_bim_base0, os);
+  os.T_base_lidar = dump.meta().T_base_lidar;
+  BimOdometry odometry(std::move(bim_cloud), report.T_bim_base0, os);
   const Pose2 odom0 = odom.at(dump.stamp(0));
   const auto t_frames = std::chrono::steady_clock::now();
   for (std::size_t i = 0; i < n; ++i) {
@@ -204,53 +212,100 @@ RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& 
     report.mean_seconds_icp += f.seconds_icp / static_cast<double>(m);
     report.mean_seconds_process += f.seconds_total / static_cast<double>(m);
   }
+}
 
-  if (report.has_ground_truth) {
-    std::vector<double> dist(m, 0.0);
-    for (std::size_t i = 1; i < m; ++i) dist[i] = dist[i - 1] + horizontal_error(gt.poses[i], gt.poses[i - 1]);
-    report.path_length = dist[m - 1];
-    auto row = [&](const std::string& name, std::size_t i) {
-      ObservationRow r;
-      r.name = name;
-      r.frame = i;
-      r.distance = dist[i];
-      r.error_wheel = horizontal_error(report.wheel.poses[i], gt.poses[i]);
-      r.error_lidar = horizontal_error(report.lidar.poses[i], gt.poses[i]);
-      r.error_bim = horizontal_error(report.bim.poses[i], gt.poses[i]);
-      return r;
-    };
-    for (int k = 1; k <= 2; ++k) {
-      const double target = report.path_length * k / 3.0;
-      const std::size_t i = static_cast<std::size_t>(std::lower_bound(dist.begin(), dist.end(), target) - dist.begin());
-      report.table.push_back(row("P" + std::to_string(k), std::min(i, m - 1)));
-    }
-    report.table.push_back(row("end", m - 1));
-    auto rmse = [&](const Trajectory& t) {
-      double s = 0.0;
-      for (std::size_t i = 0; i < m; ++i) s += std::pow(horizontal_error(t.poses[i], gt.poses[i]), 2);
-      return std::sqrt(s / static_cast<double>(m));
-    };
-    report.ape_rmse_wheel = rmse(report.wheel);
-    report.ape_rmse_lidar = rmse(report.lidar);
-    report.ape_rmse_bim = rmse(report.bim);
-    auto max_error = [&](const Trajectory& t) {
-      double worst = 0.0;
-      for (std::size_t i = 0; i < m; ++i) worst = std::max(worst, horizontal_error(t.poses[i], gt.poses[i]));
-      return worst;
-    };
-    report.max_error_wheel = max_error(report.wheel);
-    report.max_error_lidar = max_error(report.lidar);
-    report.max_error_bim = max_error(report.bim);
-    double sum_sq = 0.0;
-    for (std::size_t i = 0; i < m; ++i) {
-      if (!report.frames[i].registered) continue;
-      const double e = horizontal_error(report.frames[i].T_bim_base_registered, gt.poses[i]);
-      sum_sq += e * e;
-      report.registration_error_max = std::max(report.registration_error_max, e);
-      ++report.registrations;
-    }
-    if (report.registrations > 0) report.registration_error_rms = std::sqrt(sum_sq / static_cast<double>(report.registrations));
+// Liu et al. 2022, Table 2, the APE and the registrations' own error, all horizontal and without
+// alignment (every trajectory is in the BIM frame already), against the first frames.size() poses of `truth`.
+void measure_against_truth(RunReport& report, const Trajectory& truth) {
+  const std::size_t m = report.frames.size();
+  Trajectory gt;  // pose i at frame i, as the trajectories
+  for (std::size_t i = 0; i < m; ++i) gt.push_back(report.bim.stamps[i], truth.poses[i]);
+  const std::vector<double> dist = eval::path_lengths(gt, eval::PositionAxes::kXY);
+  report.path_length = dist.back();
+  std::vector<std::size_t> rows;  // P1, P2 at 1/3 and 2/3 of the path, the end
+  for (int k = 1; k <= 2; ++k) {
+    const double target = report.path_length * k / 3.0;
+    const auto i = static_cast<std::size_t>(std::lower_bound(dist.begin(), dist.end(), target) - dist.begin());
+    rows.push_back(std::min(i, m - 1));
   }
+  rows.push_back(m - 1);
+  eval::DriftSettings drift;
+  drift.axes = eval::PositionAxes::kXY;
+  const std::vector<eval::DriftSample> wheel = eval::drift_at(report.wheel, gt, rows, drift);
+  const std::vector<eval::DriftSample> lidar = eval::drift_at(report.lidar, gt, rows, drift);
+  const std::vector<eval::DriftSample> bim = eval::drift_at(report.bim, gt, rows, drift);
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    ObservationRow row;
+    row.name = k + 1 < rows.size() ? "P" + std::to_string(k + 1) : "end";
+    row.frame = rows[k];
+    row.distance = bim[k].path_length;
+    row.error_wheel = wheel[k].error;
+    row.error_lidar = lidar[k].error;
+    row.error_bim = bim[k].error;
+    report.table.push_back(row);
+  }
+
+  eval::ApeSettings ape;
+  ape.align = eval::AlignMode::kNone;
+  ape.axes = eval::PositionAxes::kXY;
+  const auto error_stats = [&](const Trajectory& t, const Trajectory& ref) {
+    return eval::compute_ape(t, ref, ape).translation.stats;
+  };
+  const eval::ErrorStats e_wheel = error_stats(report.wheel, gt);
+  const eval::ErrorStats e_lidar = error_stats(report.lidar, gt);
+  const eval::ErrorStats e_bim = error_stats(report.bim, gt);
+  report.ape_rmse_wheel = e_wheel.rmse;
+  report.ape_rmse_lidar = e_lidar.rmse;
+  report.ape_rmse_bim = e_bim.rmse;
+  report.max_error_wheel = e_wheel.max;
+  report.max_error_lidar = e_lidar.max;
+  report.max_error_bim = e_bim.max;
+
+  Trajectory registered, registered_gt;
+  for (std::size_t i = 0; i < m; ++i) {
+    if (!report.frames[i].registered) continue;
+    registered.push_back(gt.stamps[i], report.frames[i].T_bim_base_registered);
+    registered_gt.push_back(gt.stamps[i], gt.poses[i]);
+  }
+  if (registered.empty()) return;
+  const eval::ErrorStats e_reg = error_stats(registered, registered_gt);
+  report.registrations = e_reg.count;
+  report.registration_error_rms = e_reg.rmse;
+  report.registration_error_max = e_reg.max;
+}
+
+}  // namespace
+
+RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& mesh, const RunSettings& settings) {
+  PLUMB_CHECK(dump.num_frames() > 0, dump.dir() << ": the dump has no frame");
+  PLUMB_CHECK(dump.has_odometry(), dump.dir() << ": the dump has no odom.csv (wheel odometry is the front end's prior)");
+  PLUMB_CHECK(mesh.num_triangles() > 0, "run_bim_odometry: the model has no geometry");
+  RunReport report;
+  const OdometryInterpolator odom(dump.odometry());
+  auto bim_cloud = std::make_shared<const PointCloud>(sample_bim_cloud(mesh, settings.bim_spacing));
+  report.bim_points = bim_cloud->size();
+  const std::size_t n = settings.max_frames > 0 ? std::min(settings.max_frames, dump.num_frames()) : dump.num_frames();
+  report.frames_requested = n;
+  check_odometry_coverage(dump, odom, n, report);
+
+  const FrameSource frame_at{dump, odom, settings.deskew};
+  std::optional<PointCloud> first_frame = place_first_frame(dump, mesh, *bim_cloud, frame_at, settings, report);
+  const FrameGroundTruth gt = read_frame_ground_truth(dump, n);
+  report.has_ground_truth = gt.used;
+  report.ground_truth_note = gt.note;
+  if (gt.note == "too_short") {
+    report.warnings.push_back(dump.dir() + "/gt.tum: " + std::to_string(gt.poses.size()) + " poses for " +
+                              std::to_string(n) + " frames; no accuracy report (Table 2, APE) for this run");
+  }
+  if (report.has_ground_truth) {
+    const Eigen::Isometry3d& T0 = gt.poses.poses[0];
+    report.initial_error_xy = horizontal_error(report.T_bim_base0, T0);
+    report.initial_error_yaw_deg = std::abs(std::remainder(yaw_of(report.T_bim_base0) - yaw_of(T0), 2 * M_PI)) * 180.0 / M_PI;
+  }
+  if (report.localization_status != Status::kOk) return report;
+
+  track_frames(dump, odom, frame_at, std::move(bim_cloud), std::move(first_frame), settings, report);
+  if (report.has_ground_truth) measure_against_truth(report, gt.poses);
   return report;
 }
 

@@ -122,6 +122,30 @@ TEST(ApeTest, KnownOffsetsGiveKnownErrors) {
   EXPECT_THROW(compute_ape(est, curved_path(10)), Error);
 }
 
+TEST(ApeTest, HorizontalAxesLeaveHeightOut) {
+  // Pose i is off by (3, 4) * (i + 1) in x, y and by 12 in z: horizontal errors 5, 10, 15, 20.
+  const Trajectory ref = straight_line(4, 1.0);
+  Trajectory est = ref;
+  for (std::size_t i = 0; i < est.size(); ++i) {
+    est.poses[i].translation() += Vector3d(3.0, 4.0, 0.0) * static_cast<double>(i + 1) + Vector3d(0, 0, 12.0);
+  }
+  ApeSettings xy;
+  xy.align = AlignMode::kNone;
+  xy.axes = PositionAxes::kXY;
+  const ApeResult ape = compute_ape(est, ref, xy);
+  EXPECT_EQ(ape.translation.values, (std::vector<double>{5, 10, 15, 20}));
+  EXPECT_EQ(ape.translation.stats.max, 20.0);
+  EXPECT_EQ(ape.translation.stats.min, 5.0);
+  EXPECT_DOUBLE_EQ(ape.translation.stats.rmse, std::sqrt((25.0 + 100.0 + 225.0 + 400.0) / 4.0));
+  EXPECT_EQ(ape.rotation_deg.stats.max, 0.0);  // the axes concern positions only
+  // The default measures all three: the first pose is 13 m off (5-12-13).
+  ApeSettings xyz;
+  xyz.align = AlignMode::kNone;
+  const ApeResult full = compute_ape(est, ref, xyz);
+  EXPECT_DOUBLE_EQ(full.translation.values.front(), 13.0);
+  EXPECT_DOUBLE_EQ(full.translation.stats.max, std::hypot(20.0, 12.0));
+}
+
 TEST(RpeTest, FramePairsAreConsecutiveAndScaleErrorIsLinear) {
   const Trajectory ref = straight_line(101, 1.0);
   const Trajectory est = straight_line(101, 0.9);  // 10 % short
@@ -229,6 +253,25 @@ TEST(DriftTest, PathLengthsAndNearestIndex) {
   Trajectory no_stamps = line;
   no_stamps.stamps.clear();
   EXPECT_THROW(nearest_index(no_stamps, 1.0), Error);
+}
+
+TEST(DriftTest, HorizontalAxesMeasureTheFloorPlanPath) {
+  // A ramp rising 12 m per 5 m across the floor: 13 m per step in 3-D, 5 m in the floor plan.
+  Trajectory ref;
+  for (int i = 0; i < 4; ++i) ref.push_back(i, se3::make(Matrix3d::Identity(), Vector3d(3.0, 4.0, 12.0) * i));
+  EXPECT_EQ(path_lengths(ref, PositionAxes::kXY), (std::vector<double>{0, 5, 10, 15}));
+  EXPECT_EQ(path_lengths(ref), (std::vector<double>{0, 13, 26, 39}));
+  // 0.5 m off across the floor and 2 m in height: 0.5 m over the 10 m of floor travelled at pose 2.
+  Trajectory est = ref;
+  for (auto& P : est.poses) P.translation() += Vector3d(0.3, 0.4, 2.0);
+  DriftSettings xy;
+  xy.axes = PositionAxes::kXY;
+  const std::vector<DriftSample> d = drift_at(est, ref, {2}, xy);
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_NEAR(d[0].error, 0.5, 1e-12);
+  EXPECT_EQ(d[0].path_length, 10.0);
+  EXPECT_NEAR(d[0].drift_pct, 5.0, 1e-10);
+  EXPECT_NEAR(drift_at(est, ref, {2})[0].error, std::sqrt(0.25 + 4.0), 1e-12);
 }
 
 TEST(KittiSegmentTest, StraightLineScaleErrorGivesKnownPercentage) {

@@ -74,15 +74,24 @@ struct ErrorSeries {
   ErrorStats stats;
 };
 
+/// @brief Which components of a position difference a translational error or a path length measures.
+enum class PositionAxes {
+  kXYZ,  ///< the 3-D distance
+  /// x and y only: the horizontal error of a ground robot, whose height the floor fixes (the error of
+  /// Liu et al. 2022, Table 2); a z offset of the estimate's frame does not count.
+  kXY,
+};
+
 /// @brief Settings of the absolute pose error.
 struct ApeSettings {
   AlignMode align = AlignMode::kSE3;  ///< alignment fitted on the positions before measuring
+  PositionAxes axes = PositionAxes::kXYZ;  ///< components of the `translation` error
 };
 
 /// @brief Absolute pose error of an (associated) estimate against its reference.
 ///
 /// With E_i = P_est_i^-1 P_ref_i after alignment (evo's APE): `translation` = |p_est_i - p_ref_i|
-/// [m]; `rotation_deg` = rotation angle of E_i [deg]; `full` = ||E_i - I||_F (unit-less, as evo's
+/// [m] over ApeSettings::axes (its `stats.max` is the largest position error); `rotation_deg` = rotation angle of E_i [deg]; `full` = ||E_i - I||_F (unit-less, as evo's
 /// "full transformation").
 struct ApeResult {
   ErrorSeries translation;   ///< [m]
@@ -155,19 +164,20 @@ RpeResult compute_rpe(const Trajectory& estimate, const Trajectory& reference,
                       const RpeSettings& settings = {});
 
 /// @brief Cumulative path length: element i is the length of the polyline through positions 0..i
-///        (element 0 is 0) [m].
-std::vector<double> path_lengths(const Trajectory& trajectory);
+///        (element 0 is 0) [m], measured over `axes` (kXY: the length of its floor-plan projection).
+std::vector<double> path_lengths(const Trajectory& trajectory, PositionAxes axes = PositionAxes::kXYZ);
 
 /// @brief Settings of drift_at().
 struct DriftSettings {
   PathSource path = PathSource::kReference;  ///< whose path length is "distance travelled"
+  PositionAxes axes = PositionAxes::kXYZ;    ///< components of both the error and the path length
 };
 
 /// @brief Drift at one index: the position error as a share of the distance travelled so far.
 struct DriftSample {
   std::size_t index = 0;
   double path_length = 0.0;  ///< distance travelled from index 0 to `index` [m]
-  double error = 0.0;        ///< |p_est - p_ref| [m]
+  double error = 0.0;        ///< |p_est - p_ref| over DriftSettings::axes [m]
   double drift_pct = 0.0;    ///< error / path_length * 100; NaN when path_length is 0
 };
 

@@ -6,7 +6,7 @@
 ///        model, initial localization of the first frame, per-frame BimOdometry with the wheel
 ///        odometry as prior and for deskewing, and, when the dump has ground truth, the error table
 ///        of Liu et al. 2022, Table 2 (error at observation points as % of the distance travelled)
-///        per method.
+///        per method, measured with plumb::eval. Its LiDAR/IMU counterpart is run_lio() (lio_run.hpp).
 
 #include <functional>
 #include <optional>
@@ -83,9 +83,11 @@ struct RunReport {
   std::string ground_truth_note = "absent";  ///< "used", "absent" (no gt.tum) or "too_short" (fewer poses than frames)
   double initial_error_xy = 0.0, initial_error_yaw_deg = 0.0;
   std::vector<ObservationRow> table;    ///< observation points at 1/3, 2/3 of the path and the end
-  double path_length = 0.0;             ///< [m]
-  double ape_rmse_wheel = 0.0, ape_rmse_lidar = 0.0, ape_rmse_bim = 0.0;  ///< horizontal, no alignment [m]
-  double max_error_wheel = 0.0, max_error_lidar = 0.0, max_error_bim = 0.0;  ///< largest horizontal error [m]
+  double path_length = 0.0;             ///< distance travelled, horizontal (ground truth) [m]
+  /// eval::compute_ape() of each trajectory against the truth, horizontal (PositionAxes::kXY), no
+  /// alignment: the RMS and the largest error [m].
+  double ape_rmse_wheel = 0.0, ape_rmse_lidar = 0.0, ape_rmse_bim = 0.0;
+  double max_error_wheel = 0.0, max_error_lidar = 0.0, max_error_bim = 0.0;  ///< see ape_rmse_wheel [m]
   /// Horizontal error of the BIM registrations alone (BimFrameResult::T_bim_base_registered) against
   /// the truth, over the frames that registered: how well the model itself places the robot. With
   /// as-built deviations (the simulator's walls are shifted and turned) this bounds the corrected pose.
@@ -113,6 +115,18 @@ class OdometryInterpolator {
 ///        furnishing is not the structure).
 /// @throws plumb::Error when spacing is not positive
 PointCloud sample_bim_cloud(const bim::BimMesh& mesh, double spacing);
+
+/// @brief A frame dump's ground truth (gt.tum) for the frames a driver processes.
+struct FrameGroundTruth {
+  Trajectory poses;             ///< gt.tum as read, pose i at frame i's stamp (empty without gt.tum)
+  bool used = false;            ///< gt.tum covers the frames: the driver measures against it
+  std::string note = "absent";  ///< "used", "absent" (no gt.tum) or "too_short" (fewer poses than frames)
+};
+
+/// @brief Read gt.tum for the first `frames` frames of `dump`, one pose per frame.
+/// @throws plumb::Error when gt.tum is malformed, or when it covers the frames but the stamp of one of
+///         the first `frames` poses differs from its frame's by 1e-6 s or more (the message names both)
+FrameGroundTruth read_frame_ground_truth(const io::FrameDumpReader& dump, std::size_t frames);
 
 /// @brief Run the BIM-corrected odometry over a frame dump (see the file comment).
 /// @return the report; the localization failing gives localization_status != kOk and no trajectory

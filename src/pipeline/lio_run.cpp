@@ -1,0 +1,171 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "plumb/pipeline/lio_run.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "plumb/core/error.hpp"
+#include "plumb/eval/metrics.hpp"
+#include "plumb/pipeline/run.hpp"
+
+namespace plumb {
+namespace {
+
+// What the frame loop works from, read and checked before it.
+struct LioInput {
+  HybridLioSettings lio;  // the settings with the dump's sensor geometry
+  FrameGroundTruth gt;
+  std::vector<ImuSample> imu;  // empty in LioMode::kLoam
+  double sweep = 0.1;          // one LiDAR period [s]
+};
+
+LioInput prepare(const io::FrameDumpReader& dump, const LioRunSettings& settings, LioRunReport& report) {
+  PLUMB_CHECK(dump.num_frames() > 0, dump.dir() << ": the dump has no frame");
+  const bool imu_mode = settings.lio.mode != LioMode::kLoam;
+  PLUMB_CHECK(!imu_mode || dump.has_imu(),
+              dump.dir() << ": the " << to_string(settings.lio.mode) << " mode needs imu.csv in the dump");
+  LioInput in;
+  in.lio = settings.lio;
+  in.lio.T_base_lidar = dump.meta().T_base_lidar;
+  in.lio.T_base_imu = dump.meta().T_base_imu;
+  const std::vector<double>& elevations = dump.meta().lidar.elevations_rad;
+  if (!elevations.empty()) {
+    in.lio.image.vertical_angles_deg.clear();
+    for (double e : elevations) in.lio.image.vertical_angles_deg.push_back(e * 180.0 / 3.14159265358979323846);
+  }
+  const std::size_t n = settings.max_frames > 0 ? std::min(settings.max_frames, dump.num_frames()) : dump.num_frames();
+  report.frames_requested = n;
+  in.gt = read_frame_ground_truth(dump, n);
+  report.has_ground_truth = in.gt.used;
+  report.ground_truth_note = in.gt.note;
+  if (in.gt.note == "too_short") {
+    report.warnings.push_back(dump.dir() + "/gt.tum: " + std::to_string(in.gt.poses.size()) + " poses for " +
+                              std::to_string(n) +
+                              " frames; no accuracy report (RPE, APE, end error) and the start pose is the identity");
+  }
+  if (imu_mode) in.imu = dump.imu();
+  const double rate = dump.meta().lidar.rate_hz;
+  in.sweep = rate > 0.0 ? 1.0 / rate : 0.1;
+  return in;
+}
+
+// HybridLio over frames [0, frames_requested): the trajectory and the per-frame results.
+void track_frames(const io::FrameDumpReader& dump, const LioInput& in, const LioRunSettings& settings,
+                  LioRunReport& report) {
+  const std::size_t n = report.frames_requested;
+  // Made at the first frame, and again at the next one while no frame has started the map: the
+  // start pose is that of the frame that starts it.
+  std::optional<HybridLio> lio;
+  std::size_t first_frame = n;
+  std::size_t next_imu = 0;
+  report.frames.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double stamp = dump.stamp(i);
+    if (!lio) {
+      lio.emplace(in.gt.used ? in.gt.poses.poses[i] : Eigen::Isometry3d::Identity(), in.lio);
+      // A new estimator after a skipped first frame gets the IMU from one sweep before this frame on
+      // (the first one gets all of it).
+      if (i > 0) {
+        next_imu = static_cast<std::size_t>(std::lower_bound(in.imu.begin(), in.imu.end(), stamp - in.sweep,
+                                                             [](const ImuSample& a, double t) { return a.stamp < t; }) -
+                                            in.imu.begin());
+      }
+    }
+    // The IMU up to the end of this frame's sweep (what a live system has when the sweep is complete).
+    for (; next_imu < in.imu.size() && in.imu[next_imu].stamp <= stamp + in.sweep + 0.02; ++next_imu) {
+      lio->add_imu(in.imu[next_imu]);
+    }
+    LioFrameResult r;
+    try {
+      r = lio->process(dump.frame(i), stamp);
+    } catch (const std::exception& e) {
+      // What was computed so far is kept: the caller writes it marked partial.
+      if (first_frame == n) throw;
+      report.partial = true;
+      report.error = "frame " + std::to_string(i) + ": " + e.what();
+      break;
+    }
+    if (lio->initialized() && first_frame == n) first_frame = i;
+    if (!lio->initialized()) {
+      report.imu_samples_dropped += lio->num_imu_dropped();
+      lio.reset();
+    }
+    if (r.mode != LioFrameMode::kSkipped) report.trajectory.push_back(stamp, r.T_world_base);
+    report.frames.push_back(r);
+    if (settings.progress) settings.progress(i + 1, n);
+  }
+  PLUMB_CHECK(first_frame < n, dump.dir() << ": none of the " << n << " frames has the " << in.lio.min_init_points
+                                          << " points needed to start the map (are the frame files empty?)");
+  report.first_frame = first_frame;
+  report.imu_samples_dropped += lio->num_imu_dropped();
+}
+
+// Counts, timing and feature means over the frames processed.
+void summarize(LioRunReport& report) {
+  std::vector<double> seconds;
+  std::size_t planes = 0, structure = 0;
+  for (const LioFrameResult& r : report.frames) {
+    ++report.frames_per_mode[static_cast<std::size_t>(r.mode)];
+    report.imu_gaps += r.imu_gap ? 1 : 0;
+    report.not_converged += r.status == Status::kNotConverged ? 1 : 0;
+    report.seconds_process += r.seconds;
+    seconds.push_back(r.seconds);
+    planes += r.num_plane_points;
+    structure += r.num_structure_planes;
+  }
+  const std::size_t m = report.frames.size();
+  if (m == 0) return;
+  const auto frames = static_cast<double>(m);
+  std::sort(seconds.begin(), seconds.end());
+  report.mean_seconds_process = report.seconds_process / frames;
+  report.median_seconds_process = seconds[m / 2];
+  report.max_seconds_process = seconds.back();
+  report.frames_per_second = report.seconds_process > 0.0 ? frames / report.seconds_process : 0.0;
+  report.mean_plane_points = static_cast<double>(planes) / frames;
+  report.mean_structure_planes = static_cast<double>(structure) / frames;
+}
+
+// The trajectory against gt.tum's poses of the same frames (no alignment: the run starts at the truth).
+void measure_against_truth(LioRunReport& report, const Trajectory& truth) {
+  Trajectory gt;
+  for (std::size_t i = 0; i < report.frames.size(); ++i) {
+    if (report.frames[i].mode != LioFrameMode::kSkipped) gt.push_back(truth.stamps[i], truth.poses[i]);
+  }
+  report.has_metrics = true;
+  report.path_length = eval::path_lengths(gt).back();
+  eval::ApeSettings ape;
+  ape.align = eval::AlignMode::kNone;
+  const eval::ApeResult full = eval::compute_ape(report.trajectory, gt, ape);
+  report.ape_rmse = full.translation.stats.rmse;
+  report.max_error = full.translation.stats.max;
+  report.end_error = full.translation.values.back();
+  ape.axes = eval::PositionAxes::kXY;
+  report.end_error_xy = eval::compute_ape(report.trajectory, gt, ape).translation.values.back();
+
+  eval::RpeSettings rpe_settings;
+  rpe_settings.delta = 10.0;
+  rpe_settings.unit = eval::DeltaUnit::kMeters;
+  rpe_settings.pairs_along = eval::PathSource::kReference;
+  const eval::RpeResult rpe = eval::compute_rpe(report.trajectory, gt, rpe_settings);
+  if (rpe.status != Status::kOk) return;
+  report.rpe_pairs = rpe.translation.stats.count;
+  report.rpe_translation_mean = rpe.translation.stats.mean;
+  report.rpe_translation_rmse = rpe.translation.stats.rmse;
+  report.rpe_rotation_mean_deg = rpe.rotation_deg.stats.mean;
+}
+
+}  // namespace
+
+LioRunReport run_lio(const io::FrameDumpReader& dump, const LioRunSettings& settings) {
+  LioRunReport report;
+  const LioInput in = prepare(dump, settings, report);
+  track_frames(dump, in, settings, report);
+  summarize(report);
+  if (report.has_ground_truth && report.trajectory.size() >= 2) measure_against_truth(report, in.gt.poses);
+  return report;
+}
+
+}  // namespace plumb
