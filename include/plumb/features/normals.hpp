@@ -59,5 +59,5 @@ std::size_t compute_normals(PointCloud& cloud, const NormalSettings& settings = 
 
 #include "plumb/features/impl/normals_impl.hpp"
 
-// Within plumb's build tree the Eigen decompositions above are compiled once, in libplumb.
+// Within plumb's build tree the Eigen decompositions above are compiled once, in plumb_core.
 #include "plumb/core/impl/eigen_instantiations.hpp"

@@ -165,5 +165,5 @@ class ImuPreintegration {
 
 #include "plumb/imu/impl/preintegration_impl.hpp"
 
-// Within plumb's build tree the Eigen decompositions above are compiled once, in libplumb.
+// Within plumb's build tree the Eigen decompositions above are compiled once, in plumb_core.
 #include "plumb/core/impl/eigen_instantiations.hpp"

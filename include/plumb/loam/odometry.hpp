@@ -170,5 +170,5 @@ inline LoamResult loam_icp_scan_to_scan(const PointCloud& prev, const KdTree3f& 
 
 #include "plumb/loam/impl/odometry_impl.hpp"
 
-// Within plumb's build tree the Eigen decompositions above are compiled once, in libplumb.
+// Within plumb's build tree the Eigen decompositions above are compiled once, in plumb_core.
 #include "plumb/core/impl/eigen_instantiations.hpp"

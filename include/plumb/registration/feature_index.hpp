@@ -307,7 +307,7 @@ std::vector<std::uint32_t> feature_knn(const std::vector<std::array<float, N>>& 
 
 #ifndef PLUMB_HEADER_ONLY
 namespace plumb {
-// The FPFH (33-D) tree is compiled once, in libplumb (src/registration/feature_index.cpp): its
+// The FPFH (33-D) tree is compiled once, in plumb_core (src/registration/feature_index.cpp): its
 // 33 x 33 fixed-size eigen decomposition alone costs every including file many seconds to compile.
 extern template class FeatureKdTree<33>;
 extern template std::vector<std::uint32_t> feature_knn<33>(const std::vector<std::array<float, 33>>&,
@@ -317,5 +317,5 @@ extern template std::vector<std::uint32_t> feature_knn<33>(const std::vector<std
 }  // namespace plumb
 #endif
 
-// Within plumb's build tree the Eigen decompositions above are compiled once, in libplumb.
+// Within plumb's build tree the Eigen decompositions above are compiled once, in plumb_core.
 #include "plumb/core/impl/eigen_instantiations.hpp"

@@ -121,5 +121,5 @@ inline HornResult horn_align(const std::vector<Vector3d>& source, const std::vec
 
 }  // namespace plumb
 
-// Within plumb's build tree the Eigen decompositions above are compiled once, in libplumb.
+// Within plumb's build tree the Eigen decompositions above are compiled once, in plumb_core.
 #include "plumb/core/impl/eigen_instantiations.hpp"

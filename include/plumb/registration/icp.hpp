@@ -103,5 +103,5 @@ IcpResult align_icp(const PointCloud& source, const PointCloud& target,
 
 #include "plumb/registration/impl/icp_impl.hpp"
 
-// Within plumb's build tree the Eigen decompositions above are compiled once, in libplumb.
+// Within plumb's build tree the Eigen decompositions above are compiled once, in plumb_core.
 #include "plumb/core/impl/eigen_instantiations.hpp"

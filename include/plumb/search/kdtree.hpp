@@ -191,7 +191,7 @@ using KdTree3f = KdTree<3>;
 
 #ifndef PLUMB_HEADER_ONLY
 namespace plumb {
-// KdTree<2> and KdTree<3> are compiled once, in libplumb (src/search/kdtree.cpp); other Dim values
+// KdTree<2> and KdTree<3> are compiled once, in plumb_core (src/search/kdtree.cpp); other Dim values
 // (none yet) or PLUMB_HEADER_ONLY instantiate from the header as usual.
 extern template class KdTree<2>;
 extern template class KdTree<3>;

@@ -4,7 +4,7 @@
 /// @brief Explicit instantiation declarations of the Eigen decompositions plumb's headers use
 ///        (symmetric eigen solvers, LDLT, LLT). Each costs every including file seconds of compile
 ///        time, so within plumb's own build tree (PLUMB_EIGEN_EXTERN_TEMPLATES; the installed package
-///        never sets it, since its users' Eigen may differ) they are compiled once, in libplumb
+///        never sets it, since its users' Eigen may differ) they are compiled once, in plumb_core
 ///        (src/core/eigen_instantiations.cpp). Only decompositions of a plain matrix are covered.
 
 #include <Eigen/Cholesky>
