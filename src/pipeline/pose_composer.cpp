@@ -6,6 +6,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "plumb/core/error.hpp"
+#include "plumb/core/impl/eigen_instantiations.hpp"
 #include "plumb/core/lie.hpp"
 
 namespace plumb {

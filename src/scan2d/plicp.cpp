@@ -9,6 +9,7 @@
 #include <Eigen/LU>
 
 #include "plumb/core/error.hpp"
+#include "plumb/core/impl/eigen_instantiations.hpp"
 
 namespace plumb {
 
