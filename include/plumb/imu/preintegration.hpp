@@ -162,8 +162,3 @@ class ImuPreintegration {
 };
 
 }  // namespace plumb
-
-#include "plumb/imu/impl/preintegration_impl.hpp"
-
-// Within plumb's build tree the Eigen decompositions above are compiled once, in plumb_core.
-#include "plumb/core/impl/eigen_instantiations.hpp"

@@ -1,6 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#pragma once
-// Bodies of plumb/imu/preintegration.hpp (included at its end).
+#include "plumb/imu/preintegration.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,10 +7,12 @@
 #include <Eigen/Cholesky>
 
 #include "plumb/core/error.hpp"
+#include "plumb/core/impl/eigen_instantiations.hpp"
 
 namespace plumb {
 
 namespace imu_detail {
+namespace {
 
 // Below this angle the hold-interval coefficients use their Taylor series (4 terms: the truncation
 // and the closed forms' cancellation are both below 1e-11 relative there).
@@ -24,7 +25,7 @@ struct HoldCoefficients {
   double d1, d2, d3;        // c1'(t)/t, c2'(t)/t, c3'(t)/t
 };
 
-inline HoldCoefficients hold_coefficients(double t) {
+HoldCoefficients hold_coefficients(double t) {
   HoldCoefficients h{};
   const double t2 = t * t;
   if (t < kSeriesAngle) {
@@ -49,7 +50,7 @@ inline HoldCoefficients hold_coefficients(double t) {
 }
 
 // d/dphi [alpha(t) phi x a + beta(t) phi x (phi x a)], with alpha'/t = da, beta'/t = db.
-inline Matrix3d d_series_a(const Vector3d& phi, const Vector3d& a, double alpha, double beta, double da,
+Matrix3d d_series_a(const Vector3d& phi, const Vector3d& a, double alpha, double beta, double da,
                            double db) {
   const Vector3d pxa = phi.cross(a);
   const Vector3d pxpxa = phi.cross(pxa);
@@ -58,11 +59,12 @@ inline Matrix3d d_series_a(const Vector3d& phi, const Vector3d& a, double alpha,
   return M;
 }
 
-inline bool finite3(const Vector3d& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
+bool finite3(const Vector3d& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
 
+}  // namespace
 }  // namespace imu_detail
 
-inline ImuState retract(const ImuState& x, const Vector15d& delta) {
+ImuState retract(const ImuState& x, const Vector15d& delta) {
   ImuState y;
   y.R_world_body = x.R_world_body * so3::exp(delta.segment<3>(ImuTangent::kR));
   y.p_world_body = x.p_world_body + delta.segment<3>(ImuTangent::kP);
@@ -72,7 +74,7 @@ inline ImuState retract(const ImuState& x, const Vector15d& delta) {
   return y;
 }
 
-inline ImuPreintegration::ImuPreintegration(const ImuBias& bias_hat, const PreintegrationSettings& settings)
+ImuPreintegration::ImuPreintegration(const ImuBias& bias_hat, const PreintegrationSettings& settings)
     : settings_(settings), bias_hat_(bias_hat) {
   const ImuNoise& n = settings.noise;
   PLUMB_CHECK(n.gyro_noise_density >= 0.0 && n.accel_noise_density >= 0.0 && n.gyro_bias_random_walk >= 0.0 &&
@@ -86,13 +88,13 @@ inline ImuPreintegration::ImuPreintegration(const ImuBias& bias_hat, const Prein
               "ImuPreintegration: bias is not finite");
 }
 
-inline void ImuPreintegration::reset(const ImuBias& bias_hat) {
+void ImuPreintegration::reset(const ImuBias& bias_hat) {
   PLUMB_CHECK(imu_detail::finite3(bias_hat.gyro) && imu_detail::finite3(bias_hat.accel),
               "ImuPreintegration::reset: bias is not finite");
   *this = ImuPreintegration(bias_hat, settings_);
 }
 
-inline void ImuPreintegration::add_measurement(const Vector3d& gyro, const Vector3d& accel, double dt) {
+void ImuPreintegration::add_measurement(const Vector3d& gyro, const Vector3d& accel, double dt) {
   PLUMB_CHECK(dt > 0.0 && std::isfinite(dt), "ImuPreintegration::add_measurement: dt must be positive, got " << dt);
   PLUMB_CHECK(imu_detail::finite3(gyro) && imu_detail::finite3(accel),
               "ImuPreintegration::add_measurement: measurement is not finite");
@@ -163,7 +165,7 @@ inline void ImuPreintegration::add_measurement(const Vector3d& gyro, const Vecto
   ++num_measurements_;
 }
 
-inline Status ImuPreintegration::integrate(const std::vector<ImuSample>& samples, double t0, double t1) {
+Status ImuPreintegration::integrate(const std::vector<ImuSample>& samples, double t0, double t1) {
   PLUMB_CHECK(std::isfinite(t0) && std::isfinite(t1),
               "ImuPreintegration::integrate: interval [" << t0 << ", " << t1 << "] is not finite");
   PLUMB_CHECK(t1 >= t0, "ImuPreintegration::integrate: interval end " << t1 << " before its start " << t0);
@@ -216,7 +218,7 @@ inline Status ImuPreintegration::integrate(const std::vector<ImuSample>& samples
   return Status::kOk;
 }
 
-inline Matrix15d ImuPreintegration::sqrt_information_with_bias() const {
+Matrix15d ImuPreintegration::sqrt_information_with_bias() const {
   // cov = L L^T  =>  cov^-1 = L^-T L^-1, so U = L^-1 (lower triangular) satisfies U^T U = cov^-1.
   const Eigen::LLT<Matrix15d> llt(cov15_);
   PLUMB_CHECK(llt.info() == Eigen::Success && cov15_.diagonal().minCoeff() > 0.0,
@@ -227,19 +229,19 @@ inline Matrix15d ImuPreintegration::sqrt_information_with_bias() const {
   return L_inv;
 }
 
-inline Matrix3d ImuPreintegration::delta_R_ij_corrected(const ImuBias& bias) const {
+Matrix3d ImuPreintegration::delta_R_ij_corrected(const ImuBias& bias) const {
   return delta_R_ * so3::exp(J_R_bg_ * (bias.gyro - bias_hat_.gyro));
 }
 
-inline Vector3d ImuPreintegration::delta_v_ij_corrected(const ImuBias& bias) const {
+Vector3d ImuPreintegration::delta_v_ij_corrected(const ImuBias& bias) const {
   return delta_v_ + J_v_bg_ * (bias.gyro - bias_hat_.gyro) + J_v_ba_ * (bias.accel - bias_hat_.accel);
 }
 
-inline Vector3d ImuPreintegration::delta_p_ij_corrected(const ImuBias& bias) const {
+Vector3d ImuPreintegration::delta_p_ij_corrected(const ImuBias& bias) const {
   return delta_p_ + J_p_bg_ * (bias.gyro - bias_hat_.gyro) + J_p_ba_ * (bias.accel - bias_hat_.accel);
 }
 
-inline ImuState ImuPreintegration::predict(const ImuState& state_i) const {
+ImuState ImuPreintegration::predict(const ImuState& state_i) const {
   const Vector3d& g = settings_.g_world;
   const double dt = delta_t_;
   const Matrix3d& R_i = state_i.R_world_body;
@@ -252,7 +254,7 @@ inline ImuState ImuPreintegration::predict(const ImuState& state_i) const {
   return j;
 }
 
-inline ImuFactorResidual ImuPreintegration::residual(const ImuState& state_i, const ImuState& state_j) const {
+ImuFactorResidual ImuPreintegration::residual(const ImuState& state_i, const ImuState& state_j) const {
   constexpr int kR = ImuTangent::kR, kP = ImuTangent::kP, kV = ImuTangent::kV, kBg = ImuTangent::kBg,
                 kBa = ImuTangent::kBa;
   const Vector3d& g = settings_.g_world;
