@@ -14,6 +14,7 @@
 #include "plumb/core/point_cloud.hpp"
 #include "plumb/core/pose2.hpp"
 #include "plumb/core/rng.hpp"
+#include "plumb/core/robust_kernel.hpp"
 #include "plumb/core/sensor_data.hpp"
 #include "plumb/core/status.hpp"
 #include "plumb/core/trajectory.hpp"
@@ -32,7 +33,6 @@
 #include "plumb/registration/feature_index.hpp"
 #include "plumb/registration/horn.hpp"
 #include "plumb/registration/icp.hpp"
-#include "plumb/registration/kernels.hpp"
 #include "plumb/registration/localize.hpp"
 #include "plumb/registration/overlap.hpp"
 #include "plumb/registration/sac_ia.hpp"
@@ -80,7 +80,6 @@
 #include "plumb/imu/preintegration.hpp"
 #include "plumb/optim/imu_factor.hpp"
 #include "plumb/optim/least_squares.hpp"
-#include "plumb/optim/robust_loss.hpp"
 
 #include "plumb/bim/demo_building.hpp"
 #include "plumb/bim/floor_plan.hpp"

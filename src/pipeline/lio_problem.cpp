@@ -6,14 +6,9 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "plumb/core/robust_kernel.hpp"
+
 namespace plumb::lio_detail {
-namespace {
-
-/// Huber rho on a squared whitened norm s (RobustLoss convention: rho(s) = s inside the scale).
-double huber_rho(double s, double k) { return s <= k * k ? s : 2.0 * k * std::sqrt(s) - k * k; }
-double huber_weight(double s, double k) { return s <= k * k ? 1.0 : k / std::sqrt(s); }
-
-}  // namespace
 
 Vector15d state_error(const ImuState& x, const ImuState& m) {
   Vector15d e;
@@ -30,6 +25,8 @@ double lidar_terms(const std::vector<LoamCorrespondence>& corr, const std::vecto
   const Matrix3d& R = x.R_world_body;
   const Vector3d& p = x.p_world_body;
   double cost = 0.0;
+  // Huber on the squared whitened norm; HybridLio checks the scale (> 0, and +inf is plain least squares).
+  const RobustLoss huber{RobustKernel::kHuber, set.huber_scale};
   Eigen::Matrix<double, 3, 6> Jq;
   for (std::size_t k = 0; k < corr.size(); ++k) {
     const LoamCorrespondence& c = corr[k];
@@ -43,10 +40,10 @@ double lidar_terms(const std::vector<LoamCorrespondence>& corr, const std::vecto
       const double d = c.dir.dot(q - c.a);
       const double r = inv * d;
       const double s = r * r;
-      cost += 0.5 * huber_rho(s, set.huber_scale);
+      cost += 0.5 * huber.rho(s);
       if (H != nullptr) {
         const Matrix16d J = inv * c.dir.transpose() * Jq;
-        const double w = huber_weight(s, set.huber_scale);
+        const double w = huber.rho_prime(s);
         H->noalias() += w * J.transpose() * J;
         g->noalias() += w * J.transpose() * r;
         *sum_sq += d * d;
@@ -57,10 +54,10 @@ double lidar_terms(const std::vector<LoamCorrespondence>& corr, const std::vecto
       const Vector3d d = edge ? Vector3d(c.dir.cross(q - c.a)) : Vector3d(q - c.a);
       const Vector3d r = inv * d;
       const double s = r.squaredNorm();
-      cost += 0.5 * huber_rho(s, set.huber_scale);
+      cost += 0.5 * huber.rho(s);
       if (H != nullptr) {
         const Matrix36d J = edge ? Matrix36d(inv * hat(c.dir) * Jq) : Matrix36d(inv * Jq);
-        const double w = huber_weight(s, set.huber_scale);
+        const double w = huber.rho_prime(s);
         H->noalias() += w * J.transpose() * J;
         g->noalias() += w * J.transpose() * r;
         *sum_sq += d.squaredNorm();

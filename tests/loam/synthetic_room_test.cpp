@@ -474,7 +474,7 @@ TEST(LoamOdometryTest, NeighbourMomentsMatchADirectComputation) {
 }
 
 TEST(LoamOdometryTest, CorrespondenceWeightScalesItsResidual) {
-  // Inside the Huber threshold (0: plain least squares) a weight w multiplies the residual, so the
+  // Without a robust kernel (plain least squares) a weight w multiplies the residual, so the
   // cost, the normal matrix and the gradient all grow by w^2; weight 1 is the unweighted factor.
   const Eigen::Isometry3d T = pose(0.2, -0.1, 0.05, 5.0, 1.0, -2.0);
   std::vector<LoamCorrespondence> plain = {
@@ -488,8 +488,8 @@ TEST(LoamOdometryTest, CorrespondenceWeightScalesItsResidual) {
     Matrix6d H1, H3, P1, P3;
     Vector6d g1, g3;
     double s1 = 0.0, s3 = 0.0;
-    const double c1 = loam_detail::evaluate(one, T, 0.0, &H1, &g1, &P1, &s1);
-    const double c3 = loam_detail::evaluate(heavy, T, 0.0, &H3, &g3, &P3, &s3);
+    const double c1 = loam_detail::evaluate(one, T, RobustLoss::none(), &H1, &g1, &P1, &s1);
+    const double c3 = loam_detail::evaluate(heavy, T, RobustLoss::none(), &H3, &g3, &P3, &s3);
     EXPECT_GT(c1, 1e-4) << k;
     EXPECT_NEAR(c3, 9.0 * c1, 1e-12) << k;
     EXPECT_NEAR(s3, 9.0 * s1, 1e-12) << k;

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Horn's closed form, robust kernels, the overlap ratio and ICP on synthetic data with known answers.
+// Horn's closed form, the overlap ratio and ICP on synthetic data with known answers.
 
 #include <cmath>
 #include <cstdint>
@@ -13,7 +13,6 @@
 #include "plumb/core/rng.hpp"
 #include "plumb/registration/horn.hpp"
 #include "plumb/registration/icp.hpp"
-#include "plumb/registration/kernels.hpp"
 #include "plumb/registration/overlap.hpp"
 
 namespace plumb {
@@ -147,36 +146,6 @@ TEST(HornTest, DegenerateInputIsInvalid) {
   std::vector<Vector3d> bad = p;
   bad[1].x() = std::nan("");
   EXPECT_THROW(horn_align(bad, p), Error);
-}
-
-TEST(KernelsTest, HuberMatchesSeedEquation) {
-  const double m1 = 0.3;
-  EXPECT_DOUBLE_EQ(huber_penalty(0.1, m1), 0.005);
-  EXPECT_DOUBLE_EQ(huber_penalty(-0.1, m1), 0.005);
-  EXPECT_DOUBLE_EQ(huber_penalty(1.0, m1), 0.3 * (2.0 - 0.3) / 2.0);
-  // Continuous with a continuous derivative at m1.
-  EXPECT_NEAR(huber_penalty(m1 - 1e-9, m1), huber_penalty(m1 + 1e-9, m1), 1e-8);
-  const double h = 1e-6;
-  const double left = (huber_penalty(m1 - h, m1) - huber_penalty(m1 - 2 * h, m1)) / h;
-  const double right = (huber_penalty(m1 + 2 * h, m1) - huber_penalty(m1 + h, m1)) / h;
-  EXPECT_NEAR(left, right, 1e-5);
-}
-
-TEST(KernelsTest, WeightIsDerivativeOverResidual) {
-  // Huber: rho = huber_penalty; w(r) = rho'(r) / r, checked numerically.
-  const double s = 0.2;
-  for (double r : {0.05, 0.19, 0.25, 1.0, 3.0}) {
-    const double h = 1e-7;
-    const double drho = (huber_penalty(r + h, s) - huber_penalty(r - h, s)) / (2 * h);
-    EXPECT_NEAR(robust_weight(RobustKernel::kHuber, r, s), drho / r, 1e-6) << r;
-    // Cauchy: rho = s^2/2 log(1 + (r/s)^2).
-    auto cauchy = [&](double x) { return 0.5 * s * s * std::log1p((x / s) * (x / s)); };
-    EXPECT_NEAR(robust_weight(RobustKernel::kCauchy, r, s), (cauchy(r + h) - cauchy(r - h)) / (2 * h) / r, 1e-6);
-  }
-  EXPECT_EQ(robust_weight(RobustKernel::kTukey, 0.3, 0.2), 0.0);
-  EXPECT_EQ(robust_weight(RobustKernel::kTukey, 0.0, 0.2), 1.0);
-  EXPECT_EQ(robust_weight(RobustKernel::kNone, 100.0, 0.2), 1.0);
-  EXPECT_EQ(robust_weight(RobustKernel::kHuber, std::nan(""), 0.2), 0.0);
 }
 
 TEST(OverlapTest, CountsPointsWithinBeta) {

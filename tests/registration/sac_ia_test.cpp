@@ -11,6 +11,7 @@
 
 #include "plumb/core/error.hpp"
 #include "plumb/core/rng.hpp"
+#include "plumb/core/robust_kernel.hpp"
 #include "plumb/features/fpfh.hpp"
 #include "plumb/features/normals.hpp"
 #include "plumb/io/cloud_io.hpp"
@@ -119,8 +120,8 @@ TEST(SacIaTest, SameSeedBitIdenticalOtherSeedRuns) {
   double total = 0.0;
   for (const Vector3f& p : b.source.points) {
     const auto nn = tree.nearest((r1.T_target_source * p.cast<double>()).cast<float>());
-    total += huber_penalty(std::min(std::sqrt(static_cast<double>(nn->dist_sq)), s.max_correspondence_distance),
-                           s.huber_threshold);
+    total += RobustLoss::huber(s.huber_threshold)
+                 .loss(std::min(std::sqrt(static_cast<double>(nn->dist_sq)), s.max_correspondence_distance));
   }
   EXPECT_NEAR(r1.score, total, 1e-6 * total);
 }

@@ -31,9 +31,9 @@
 
 #include "plumb/core/error.hpp"
 #include "plumb/core/lie.hpp"
+#include "plumb/core/robust_kernel.hpp"
 #include "plumb/core/status.hpp"
 #include "plumb/core/types.hpp"
-#include "plumb/optim/robust_loss.hpp"
 
 namespace plumb {
 

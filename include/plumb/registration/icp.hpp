@@ -11,8 +11,8 @@
 #include <Eigen/Geometry>
 
 #include "plumb/core/point_cloud.hpp"
+#include "plumb/core/robust_kernel.hpp"
 #include "plumb/core/status.hpp"
-#include "plumb/registration/kernels.hpp"
 #include "plumb/search/kdtree.hpp"
 
 namespace plumb {

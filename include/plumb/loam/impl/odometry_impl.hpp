@@ -12,6 +12,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "plumb/core/error.hpp"
+#include "plumb/core/robust_kernel.hpp"
 
 namespace plumb {
 
@@ -34,14 +35,13 @@ inline FactorCounts count(const std::vector<Factor>& factors) {
   return c;
 }
 
-inline double huber_rho(double e, double k) {
-  if (k <= 0.0 || e <= k) return 0.5 * e * e;
-  return k * (e - 0.5 * k);
+/// The kernel of settings.huber_scale: Huber on the residual norm, or plain least squares at 0.
+inline RobustLoss odometry_kernel(const LoamSettings& s) {
+  return s.huber_scale > 0.0 ? RobustLoss::huber(s.huber_scale) : RobustLoss::none();
 }
-inline double huber_weight(double e, double k) { return (k <= 0.0 || e <= k) ? 1.0 : k / e; }
 
 // Residual (norm) and, optionally, its weighted contribution to H and g.
-inline double evaluate(const std::vector<Factor>& factors, const Eigen::Isometry3d& T, double huber,
+inline double evaluate(const std::vector<Factor>& factors, const Eigen::Isometry3d& T, const RobustLoss& kernel,
                        Matrix6d* H, Vector6d* g, Matrix6d* H_plain, double* sum_sq) {
   double cost = 0.0;
   if (H != nullptr) { H->setZero(); g->setZero(); H_plain->setZero(); *sum_sq = 0.0; }
@@ -52,9 +52,9 @@ inline double evaluate(const std::vector<Factor>& factors, const Eigen::Isometry
       const double r = f.weight * point_to_plane_residual(T, f.p, f.a, f.dir, H != nullptr ? &J1 : nullptr);
       if (H != nullptr) J1 *= f.weight;
       const double e = std::abs(r);
-      cost += huber_rho(e, huber);
+      cost += kernel.loss(e);
       if (H != nullptr) {
-        const double w = huber_weight(e, huber);
+        const double w = kernel.weight(e);
         const Matrix6d JtJ = J1.transpose() * J1;
         *H += w * JtJ;
         *H_plain += JtJ;
@@ -67,9 +67,9 @@ inline double evaluate(const std::vector<Factor>& factors, const Eigen::Isometry
                                          : point_to_point_residual(T, f.p, f.a, H != nullptr ? &J3 : nullptr));
       if (H != nullptr) J3 *= f.weight;
       const double e = r.norm();
-      cost += huber_rho(e, huber);
+      cost += kernel.loss(e);
       if (H != nullptr) {
-        const double w = huber_weight(e, huber);
+        const double w = kernel.weight(e);
         const Matrix6d JtJ = J3.transpose() * J3;
         *H += w * JtJ;
         *H_plain += JtJ;
@@ -118,6 +118,7 @@ LoamResult solve_se3(const Eigen::Isometry3d& guess, const LoamSettings& s, Asso
   Matrix6d H, H_plain;
   Vector6d g;
   double sum_sq = 0.0;
+  const RobustLoss kernel = odometry_kernel(s);
   for (int it = 0; it < s.max_iterations; ++it) {
     factors.clear();
     associate(T, factors);
@@ -132,7 +133,7 @@ LoamResult solve_se3(const Eigen::Isometry3d& guess, const LoamSettings& s, Asso
       res.T_prev_cur = T;
       return res;
     }
-    const double cost = evaluate(factors, T, s.huber_scale, &H, &g, &H_plain, &sum_sq);
+    const double cost = evaluate(factors, T, kernel, &H, &g, &H_plain, &sum_sq);
     const double n = static_cast<double>(c.total());
     res.rmse = std::sqrt(sum_sq / n);
     const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(H_plain / n, Eigen::EigenvaluesOnly);
@@ -146,7 +147,7 @@ LoamResult solve_se3(const Eigen::Isometry3d& guess, const LoamSettings& s, Asso
       delta = A.ldlt().solve(-g);
       if (!delta.allFinite()) break;
       const Eigen::Isometry3d T_new = T * se3::exp(delta);
-      const double new_cost = evaluate(factors, T_new, s.huber_scale, nullptr, nullptr, nullptr, nullptr);
+      const double new_cost = evaluate(factors, T_new, kernel, nullptr, nullptr, nullptr, nullptr);
       if (new_cost <= cost) {
         T = T_new;
         accepted = true;

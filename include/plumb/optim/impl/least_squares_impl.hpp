@@ -142,7 +142,7 @@ class Term final : public TermBase {
     J_.setZero();
     f_(x, r_, &J_);
     const double s = r_.squaredNorm();
-    const double w = loss().weight(s);
+    const double w = loss().rho_prime(s);
     const std::size_t n = blocks().size();
     for (std::size_t a = 0; a < n; ++a) {
       const int oa = offset[static_cast<std::size_t>(blocks()[a])];

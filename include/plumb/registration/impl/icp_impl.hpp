@@ -240,11 +240,12 @@ inline double icp_degeneracy(const std::vector<IcpPair>& pairs, bool point_to_pl
 /// One update from the current pairs; false when the system cannot be solved.
 inline bool icp_step(const std::vector<IcpPair>& pairs, const IcpSettings& s, Eigen::Isometry3d& delta) {
   const bool point_to_plane = s.method == IcpMethod::kPointToPlane;
+  const RobustLoss kernel = RobustLoss::make(s.kernel, s.kernel_scale);
   if (!point_to_plane) {
     // Liu et al. 2022, eq. 5-6: Horn's closed form on the (weighted) pairs.
     HornAccumulator acc;
     for (const IcpPair& pr : pairs) {
-      const double w = s.kernel == RobustKernel::kNone ? 1.0 : robust_weight(s.kernel, icp_residual(pr, false), s.kernel_scale);
+      const double w = kernel.weight(icp_residual(pr, false));
       acc.add(pr.x, pr.q, w);
     }
     const HornResult h = acc.solve();
@@ -261,7 +262,7 @@ inline bool icp_step(const std::vector<IcpPair>& pairs, const IcpSettings& s, Ei
   Vector6d g = Vector6d::Zero();
   for (const IcpPair& pr : pairs) {
     const double r = pr.n.dot(pr.x - pr.q);
-    const double w = s.kernel == RobustKernel::kNone ? 1.0 : robust_weight(s.kernel, r, s.kernel_scale);
+    const double w = kernel.weight(r);
     if (!(w > 0.0)) continue;
     Vector6d J;
     J << (pr.x - c).cross(pr.n), pr.n;

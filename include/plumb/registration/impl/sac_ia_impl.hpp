@@ -10,9 +10,9 @@
 
 #include "plumb/core/error.hpp"
 #include "plumb/core/rng.hpp"
+#include "plumb/core/robust_kernel.hpp"
 #include "plumb/registration/feature_index.hpp"
 #include "plumb/registration/horn.hpp"
-#include "plumb/registration/kernels.hpp"
 
 namespace plumb {
 
@@ -199,9 +199,10 @@ class SacIaScorer {
         target_tree_(target_tree),
         score_order_(score_order),
         m1_(settings.huber_threshold),
+        huber_(RobustLoss::huber(m1_)),
         m1_sq_f_(static_cast<float>(m1_ * m1_)),
         max_d_sq_(static_cast<float>(settings.max_correspondence_distance * settings.max_correspondence_distance)),
-        far_cost_(huber_penalty(settings.max_correspondence_distance, m1_)) {}
+        far_cost_(huber_.loss(settings.max_correspondence_distance)) {}
 
   // Huber total (Liu et al. 2022, eq. 2, distances truncated at max_correspondence_distance) over
   // score_order[begin, end), added to `total`; stops early once total >= bound (exact: every
@@ -215,7 +216,7 @@ class SacIaScorer {
         total += far_cost_;
         continue;
       }
-      total += huber_penalty(std::sqrt(static_cast<double>(nn->dist_sq)), m1_);
+      total += huber_.loss(std::sqrt(static_cast<double>(nn->dist_sq)));
       if (nn->dist_sq < m1_sq_f_) {
         ++inliers.count;
         inliers.sum_sq += static_cast<double>(nn->dist_sq);
@@ -229,6 +230,7 @@ class SacIaScorer {
   const KdTree3f& target_tree_;
   const std::vector<std::size_t>& score_order_;
   const double m1_;
+  const RobustLoss huber_;  // Liu et al. 2022, eq. 2, m1 = the scale
   const float m1_sq_f_;
   const float max_d_sq_;
   const double far_cost_;
