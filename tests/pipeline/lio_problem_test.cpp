@@ -8,6 +8,8 @@
 #include <random>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
+
 #include "../../src/pipeline/lio_problem.hpp"
 #include "plumb/core/lie.hpp"
 

@@ -129,17 +129,17 @@ class LoamMap {
 /// @return the estimate; too few features or correspondences → Status::kInsufficientData
 /// @throws plumb::Error on misuse: non-finite guess, bad settings, non-empty feature clouds without rings
 /// @note Deterministic; single-threaded; O(iterations * n log m).
-inline LoamResult loam_scan_to_scan(const LoamFeatures& prev, const LoamFeatures& cur,
-                                    const Eigen::Isometry3d& T_prev_cur_guess,
-                                    const LoamSettings& settings = {});
+LoamResult loam_scan_to_scan(const LoamFeatures& prev, const LoamFeatures& cur,
+                             const Eigen::Isometry3d& T_prev_cur_guess,
+                             const LoamSettings& settings = {});
 
 /// @brief LOAM scan-to-local-map: all current edge / plane points (incl. candidates) against a
 ///        feature map; a plane is fitted to `map_neighbors` nearest map plane points (PCA), an edge
 ///        line along the principal direction of the nearest map edge points.
 /// @param T_map_cur_guess initial estimate; the result's T_prev_cur is T_map_cur
-inline LoamResult loam_scan_to_map(const LoamMap& map, const LoamFeatures& cur,
-                                   const Eigen::Isometry3d& T_map_cur_guess,
-                                   const LoamSettings& settings = {});
+LoamResult loam_scan_to_map(const LoamMap& map, const LoamFeatures& cur,
+                            const Eigen::Isometry3d& T_map_cur_guess,
+                            const LoamSettings& settings = {});
 
 /// @brief The association step of loam_scan_to_map() on its own, for an outside solver (the
 ///        LiDAR/IMU estimator): the current frame's edges, edge candidates, planes and plane
@@ -148,27 +148,24 @@ inline LoamResult loam_scan_to_map(const LoamMap& map, const LoamFeatures& cur,
 ///        map_plane_tolerance and map_edge_ratio of `settings` are used).
 /// @param out receives the correspondences (appended)
 /// @note Deterministic; const on the map, so several threads may associate against one map.
-inline void loam_associate_map(const LoamMap& map, const LoamFeatures& cur, const Eigen::Isometry3d& T_map_cur,
-                               const LoamSettings& settings, std::vector<LoamCorrespondence>& out);
+void loam_associate_map(const LoamMap& map, const LoamFeatures& cur, const Eigen::Isometry3d& T_map_cur,
+                        const LoamSettings& settings, std::vector<LoamCorrespondence>& out);
 
 /// @brief The association step of loam_icp_scan_to_scan() on its own: each finite point of `cur`
 ///        transformed by `T_target_cur` paired with its nearest target point within
 ///        `max_correspondence_distance` [m] (appended to `out`).
-inline void loam_associate_points(const PointCloud& target, const KdTree3f& target_tree, const PointCloud& cur,
-                                  const Eigen::Isometry3d& T_target_cur, double max_correspondence_distance,
-                                  std::vector<LoamCorrespondence>& out);
+void loam_associate_points(const PointCloud& target, const KdTree3f& target_tree, const PointCloud& cur,
+                           const Eigen::Isometry3d& T_target_cur, double max_correspondence_distance,
+                           std::vector<LoamCorrespondence>& out);
 
 /// @brief Point-to-point ICP (Zhou et al. 2021, eq. 20) with the same solver: each point of `cur` against its
 ///        nearest point of `prev` within max_correspondence_distance (the hybrid switch's matcher
 ///        when a frame has too few plane points).
 /// @param prev_tree kd-tree built on prev.points
-inline LoamResult loam_icp_scan_to_scan(const PointCloud& prev, const KdTree3f& prev_tree,
-                                        const PointCloud& cur, const Eigen::Isometry3d& T_prev_cur_guess,
-                                        const LoamSettings& settings = {});
+LoamResult loam_icp_scan_to_scan(const PointCloud& prev, const KdTree3f& prev_tree,
+                                 const PointCloud& cur, const Eigen::Isometry3d& T_prev_cur_guess,
+                                 const LoamSettings& settings = {});
 
 }  // namespace plumb
 
 #include "plumb/loam/impl/odometry_impl.hpp"
-
-// Within plumb's build tree the Eigen decompositions above are compiled once, in plumb_core.
-#include "plumb/core/impl/eigen_instantiations.hpp"

@@ -102,6 +102,3 @@ IcpResult align_icp(const PointCloud& source, const PointCloud& target,
 }  // namespace plumb
 
 #include "plumb/registration/impl/icp_impl.hpp"
-
-// Within plumb's build tree the Eigen decompositions above are compiled once, in plumb_core.
-#include "plumb/core/impl/eigen_instantiations.hpp"
