@@ -61,7 +61,6 @@ LONG_FUNCTIONS = {
     "examples/cli/eval_command.cpp:run_eval": 152,
     "include/plumb/features/impl/fpfh_impl.hpp:compute_fpfh": 169,
     "include/plumb/loam/impl/features_impl.hpp:extract_loam_features": 164,
-    "include/plumb/segmentation/impl/plane_ransac_impl.hpp:fit_plane_ransac": 178,
     "src/pipeline/bim_localizer.cpp:BimLocalizer::localize": 175,
 }
 FUNCTION_GLOBS = ("include/**/*.hpp", "src/**/*.cpp", "src/**/*.hpp", "examples/**/*.cpp", "bench/**/*.cpp",

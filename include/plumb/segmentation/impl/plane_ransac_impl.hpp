@@ -193,6 +193,124 @@ inline void orient_plane(Plane& p, const Vector3d& axis) {
   }
 }
 
+/// Checks the settings and the inputs' sizes of fit_plane_ransac().
+inline void check_plane_ransac_inputs(const std::vector<Vector3f>& points, const std::vector<Vector3f>& normals,
+                                      const PlaneRansacSettings& s) {
+  PLUMB_CHECK(std::isfinite(s.distance_threshold) && s.distance_threshold > 0.0,
+              "fit_plane_ransac: distance_threshold = " << s.distance_threshold << " must be finite and > 0");
+  PLUMB_CHECK(s.max_iterations >= 1, "fit_plane_ransac: max_iterations = " << s.max_iterations << " must be >= 1");
+  PLUMB_CHECK(s.confidence >= 0.0 && s.confidence <= 1.0,
+              "fit_plane_ransac: confidence = " << s.confidence << " must be in [0, 1]");
+  PLUMB_CHECK(s.axis.allFinite() && s.axis.norm() > 0.0, "fit_plane_ransac: settings.axis must be non-zero");
+  PLUMB_CHECK(std::isfinite(s.max_axis_angle) && s.max_axis_angle >= 0.0,
+              "fit_plane_ransac: max_axis_angle = " << s.max_axis_angle << " must be finite and >= 0");
+  PLUMB_CHECK(!std::isnan(s.max_normal_angle), "fit_plane_ransac: max_normal_angle is NaN");
+  PLUMB_CHECK(s.min_inliers >= 3, "fit_plane_ransac: min_inliers = " << s.min_inliers << " must be >= 3");
+  PLUMB_CHECK(normals.empty() || normals.size() == points.size(),
+              "fit_plane_ransac: " << normals.size() << " normals for " << points.size() << " points");
+  PLUMB_CHECK(s.sampling != PlaneSampling::kPointNormal || !normals.empty(),
+              "fit_plane_ransac: kPointNormal sampling needs normals");
+}
+
+/// Gathers the finite candidates into `c` (their normals too when c.has_normals is set) and, for
+/// kPointNormal sampling, their normals as given into `sample_normals`.
+inline void gather_plane_candidates(const std::vector<Vector3f>& points, const std::vector<std::size_t>& candidates,
+                                    const std::vector<Vector3f>& normals, bool point_normal, PlaneCandidates& c,
+                                    std::vector<Vector3f>& sample_normals) {
+  const std::size_t m = candidates.empty() ? points.size() : candidates.size();
+  c.x.reserve(m);
+  c.y.reserve(m);
+  c.z.reserve(m);
+  c.index.reserve(m);
+  if (c.has_normals) {
+    c.nx.reserve(m);
+    c.ny.reserve(m);
+    c.nz.reserve(m);
+  }
+  if (point_normal) sample_normals.reserve(m);
+  for (std::size_t j = 0; j < m; ++j) {
+    const std::size_t i = candidates.empty() ? j : candidates[j];
+    PLUMB_CHECK(i < points.size(), "fit_plane_ransac: candidate index " << i << " out of range for "
+                                                                        << points.size() << " points");
+    const Vector3f& p = points[i];
+    if (!p.allFinite()) continue;
+    c.x.push_back(p.x());
+    c.y.push_back(p.y());
+    c.z.push_back(p.z());
+    c.index.push_back(i);
+    if (point_normal) sample_normals.push_back(normals[i]);
+    if (c.has_normals) {
+      const Vector3f& nn = normals[i];
+      const bool ok = nn.allFinite();
+      c.nx.push_back(ok ? nn.x() : 0.0f);
+      c.ny.push_back(ok ? nn.y() : 0.0f);
+      c.nz.push_back(ok ? nn.z() : 0.0f);  // a zero normal never agrees (cos_normal > -1 ... see below)
+    }
+  }
+}
+
+/// Draws one plane hypothesis (unit normal `nrm` through `p0`): a candidate and its normal
+/// (kPointNormal), or three distinct candidates. False when the drawn points give no plane (a bad
+/// normal, collinear points); the random draws are the same either way.
+inline bool sample_plane_hypothesis(Rng& rng, const PlaneCandidates& c, const std::vector<Vector3f>& sample_normals,
+                                    bool point_normal, Vector3d& nrm, Vector3d& p0) {
+  const std::size_t n = c.index.size();
+  if (point_normal) {
+    const std::size_t i0 = static_cast<std::size_t>(rng.uniform_index(n));
+    const Vector3f& nf = sample_normals[i0];
+    if (!nf.allFinite() || !(nf.squaredNorm() > 0.0f)) return false;
+    nrm = nf.cast<double>().normalized();
+    p0 = Vector3d(c.x[i0], c.y[i0], c.z[i0]);
+    return true;
+  }
+  const std::size_t i0 = static_cast<std::size_t>(rng.uniform_index(n));
+  std::size_t i1 = static_cast<std::size_t>(rng.uniform_index(n - 1));
+  if (i1 >= i0) ++i1;
+  std::size_t i2 = static_cast<std::size_t>(rng.uniform_index(n - 2));
+  // map i2 into [0, n) \ {i0, i1}
+  const std::size_t lo = std::min(i0, i1), hi = std::max(i0, i1);
+  if (i2 >= lo) ++i2;
+  if (i2 >= hi) ++i2;
+  p0 = Vector3d(c.x[i0], c.y[i0], c.z[i0]);
+  const Vector3d p1(c.x[i1], c.y[i1], c.z[i1]);
+  const Vector3d p2(c.x[i2], c.y[i2], c.z[i2]);
+  const Vector3d e1 = p1 - p0, e2 = p2 - p0;
+  nrm = e1.cross(e2);
+  const double len = nrm.norm();
+  if (!(len > 1e-12 * std::max(1e-300, e1.squaredNorm() + e2.squaredNorm()))) return false;  // collinear
+  nrm /= len;
+  return true;
+}
+
+/// The cloud indices of the candidates within `tau` of `pl` whose normal agrees (when c.has_normals),
+/// in candidate order.
+inline void collect_plane_inliers(const PlaneCandidates& c, const Plane& pl, float tau, float cos_normal,
+                                  std::vector<std::size_t>& inl) {
+  inl.clear();
+  const float a = static_cast<float>(pl.normal.x()), b = static_cast<float>(pl.normal.y()),
+              cc = static_cast<float>(pl.normal.z()), d = static_cast<float>(pl.offset);
+  for (std::size_t j = 0; j < c.index.size(); ++j) {
+    const float dist = std::abs(a * c.x[j] + b * c.y[j] + cc * c.z[j] - d);
+    bool ok = dist < tau;
+    if (ok && c.has_normals) ok = std::abs(a * c.nx[j] + b * c.ny[j] + cc * c.nz[j]) >= cos_normal;
+    if (ok) inl.push_back(c.index[j]);
+  }
+}
+
+/// Lowers `needed`, the iterations after which a hypothesis as good as one with inlier fraction `w`
+/// would have been drawn with probability `confidence` (log_fail = log(1 - confidence)).
+inline void update_needed_iterations(double w, bool point_normal, double confidence, double log_fail,
+                                     double& needed) {
+  const double w3 = point_normal ? w : w * w * w;
+  if (confidence < 1.0) {
+    if (w3 >= 1.0) {
+      needed = 0.0;
+    } else if (w3 > 0.0) {
+      needed = std::min(needed, log_fail / std::log1p(-w3));
+    }
+  }
+}
+
 }  // namespace detail
 
 inline bool fit_plane_least_squares(const std::vector<Vector3f>& points, const std::vector<std::size_t>& indices,
@@ -229,25 +347,34 @@ inline bool fit_plane_least_squares(const std::vector<Vector3f>& points, const s
   return plane.normal.allFinite();
 }
 
+namespace detail {
+
+/// Least-squares refit of `best` to its `inliers` (settings.refine): the refit replaces the plane
+/// and its inliers when it satisfies the axis constraint and keeps at least as many inliers.
+inline void refit_plane(const std::vector<Vector3f>& points, const PlaneCandidates& c, const PlaneRansacSettings& s,
+                        const Vector3d& axis, double cos_eps, double sin_eps, float tau, float cos_normal, Plane& best,
+                        std::vector<std::size_t>& inliers) {
+  Plane refit;
+  if (fit_plane_least_squares(points, inliers, refit) &&
+      plane_constraint_ok(refit.normal, s.constraint, axis, cos_eps, sin_eps)) {
+    std::vector<std::size_t> refit_inliers;
+    collect_plane_inliers(c, refit, tau, cos_normal, refit_inliers);
+    if (refit_inliers.size() >= inliers.size()) {
+      best = refit;
+      inliers = std::move(refit_inliers);
+    }
+  }
+}
+
+}  // namespace detail
+
 inline PlaneRansacResult fit_plane_ransac(const std::vector<Vector3f>& points,
                                           const std::vector<std::size_t>& candidates,
                                           const std::vector<Vector3f>& normals,
                                           const PlaneRansacSettings& settings) {
   const PlaneRansacSettings& s = settings;
-  PLUMB_CHECK(std::isfinite(s.distance_threshold) && s.distance_threshold > 0.0,
-              "fit_plane_ransac: distance_threshold = " << s.distance_threshold << " must be finite and > 0");
-  PLUMB_CHECK(s.max_iterations >= 1, "fit_plane_ransac: max_iterations = " << s.max_iterations << " must be >= 1");
-  PLUMB_CHECK(s.confidence >= 0.0 && s.confidence <= 1.0,
-              "fit_plane_ransac: confidence = " << s.confidence << " must be in [0, 1]");
-  PLUMB_CHECK(s.axis.allFinite() && s.axis.norm() > 0.0, "fit_plane_ransac: settings.axis must be non-zero");
-  PLUMB_CHECK(std::isfinite(s.max_axis_angle) && s.max_axis_angle >= 0.0,
-              "fit_plane_ransac: max_axis_angle = " << s.max_axis_angle << " must be finite and >= 0");
-  PLUMB_CHECK(!std::isnan(s.max_normal_angle), "fit_plane_ransac: max_normal_angle is NaN");
-  PLUMB_CHECK(s.min_inliers >= 3, "fit_plane_ransac: min_inliers = " << s.min_inliers << " must be >= 3");
-  PLUMB_CHECK(normals.empty() || normals.size() == points.size(),
-              "fit_plane_ransac: " << normals.size() << " normals for " << points.size() << " points");
+  detail::check_plane_ransac_inputs(points, normals, s);
   const bool point_normal = s.sampling == PlaneSampling::kPointNormal;
-  PLUMB_CHECK(!point_normal || !normals.empty(), "fit_plane_ransac: kPointNormal sampling needs normals");
 
   PlaneRansacResult out;
   const Vector3d axis = s.axis.normalized();
@@ -262,36 +389,7 @@ inline PlaneRansacResult fit_plane_ransac(const std::vector<Vector3f>& points,
   detail::PlaneCandidates c;
   c.has_normals = !normals.empty() && cos_normal > -1.0f;
   std::vector<Vector3f> sample_normals;  // kPointNormal: the candidates' normals
-  const std::size_t m = candidates.empty() ? points.size() : candidates.size();
-  c.x.reserve(m);
-  c.y.reserve(m);
-  c.z.reserve(m);
-  c.index.reserve(m);
-  if (c.has_normals) {
-    c.nx.reserve(m);
-    c.ny.reserve(m);
-    c.nz.reserve(m);
-  }
-  if (point_normal) sample_normals.reserve(m);
-  for (std::size_t j = 0; j < m; ++j) {
-    const std::size_t i = candidates.empty() ? j : candidates[j];
-    PLUMB_CHECK(i < points.size(), "fit_plane_ransac: candidate index " << i << " out of range for "
-                                                                        << points.size() << " points");
-    const Vector3f& p = points[i];
-    if (!p.allFinite()) continue;
-    c.x.push_back(p.x());
-    c.y.push_back(p.y());
-    c.z.push_back(p.z());
-    c.index.push_back(i);
-    if (point_normal) sample_normals.push_back(normals[i]);
-    if (c.has_normals) {
-      const Vector3f& nn = normals[i];
-      const bool ok = nn.allFinite();
-      c.nx.push_back(ok ? nn.x() : 0.0f);
-      c.ny.push_back(ok ? nn.y() : 0.0f);
-      c.nz.push_back(ok ? nn.z() : 0.0f);  // a zero normal never agrees (cos_normal > -1 ... see below)
-    }
-  }
+  detail::gather_plane_candidates(points, candidates, normals, point_normal, c, sample_normals);
   const std::size_t n = c.index.size();
   out.num_candidates = n;
   if (n < 3 || n < s.min_inliers) return out;  // kInsufficientData
@@ -313,30 +411,7 @@ inline PlaneRansacResult fit_plane_ransac(const std::vector<Vector3f>& points,
     ++it;
     Vector3d nrm;
     Vector3d p0;
-    if (point_normal) {
-      const std::size_t i0 = static_cast<std::size_t>(rng.uniform_index(n));
-      const Vector3f& nf = sample_normals[i0];
-      if (!nf.allFinite() || !(nf.squaredNorm() > 0.0f)) continue;
-      nrm = nf.cast<double>().normalized();
-      p0 = Vector3d(c.x[i0], c.y[i0], c.z[i0]);
-    } else {
-    const std::size_t i0 = static_cast<std::size_t>(rng.uniform_index(n));
-    std::size_t i1 = static_cast<std::size_t>(rng.uniform_index(n - 1));
-    if (i1 >= i0) ++i1;
-    std::size_t i2 = static_cast<std::size_t>(rng.uniform_index(n - 2));
-    // map i2 into [0, n) \ {i0, i1}
-    const std::size_t lo = std::min(i0, i1), hi = std::max(i0, i1);
-    if (i2 >= lo) ++i2;
-    if (i2 >= hi) ++i2;
-    p0 = Vector3d(c.x[i0], c.y[i0], c.z[i0]);
-    const Vector3d p1(c.x[i1], c.y[i1], c.z[i1]);
-    const Vector3d p2(c.x[i2], c.y[i2], c.z[i2]);
-    const Vector3d e1 = p1 - p0, e2 = p2 - p0;
-    nrm = e1.cross(e2);
-    const double len = nrm.norm();
-    if (!(len > 1e-12 * std::max(1e-300, e1.squaredNorm() + e2.squaredNorm()))) continue;  // collinear
-    nrm /= len;
-    }
+    if (!detail::sample_plane_hypothesis(rng, c, sample_normals, point_normal, nrm, p0)) continue;
     if (!detail::plane_constraint_ok(nrm, s.constraint, axis, cos_eps, sin_eps)) continue;
     const double d = nrm.dot(p0);
     const std::size_t count =
@@ -352,14 +427,7 @@ inline PlaneRansacResult fit_plane_ransac(const std::vector<Vector3f>& points,
       best.normal = nrm;
       best.offset = d;
       const double w = static_cast<double>(count) / static_cast<double>(n);
-      const double w3 = point_normal ? w : w * w * w;
-      if (s.confidence < 1.0) {
-        if (w3 >= 1.0) {
-          needed = 0.0;
-        } else if (w3 > 0.0) {
-          needed = std::min(needed, log_fail / std::log1p(-w3));
-        }
-      }
+      detail::update_needed_iterations(w, point_normal, s.confidence, log_fail, needed);
     }
   }
   out.iterations = it;
@@ -369,30 +437,10 @@ inline PlaneRansacResult fit_plane_ransac(const std::vector<Vector3f>& points,
     return out;
   }
 
-  auto collect = [&](const Plane& pl, std::vector<std::size_t>& inl) {
-    inl.clear();
-    const float a = static_cast<float>(pl.normal.x()), b = static_cast<float>(pl.normal.y()),
-                cc = static_cast<float>(pl.normal.z()), d = static_cast<float>(pl.offset);
-    for (std::size_t j = 0; j < n; ++j) {
-      const float dist = std::abs(a * c.x[j] + b * c.y[j] + cc * c.z[j] - d);
-      bool ok = dist < tau;
-      if (ok && c.has_normals) ok = std::abs(a * c.nx[j] + b * c.ny[j] + cc * c.nz[j]) >= cos_normal;
-      if (ok) inl.push_back(c.index[j]);
-    }
-  };
   std::vector<std::size_t> inliers;
-  collect(best, inliers);
+  detail::collect_plane_inliers(c, best, tau, cos_normal, inliers);
   if (s.refine && inliers.size() >= 3) {
-    Plane refit;
-    if (fit_plane_least_squares(points, inliers, refit) &&
-        detail::plane_constraint_ok(refit.normal, s.constraint, axis, cos_eps, sin_eps)) {
-      std::vector<std::size_t> refit_inliers;
-      collect(refit, refit_inliers);
-      if (refit_inliers.size() >= inliers.size()) {
-        best = refit;
-        inliers = std::move(refit_inliers);
-      }
-    }
+    detail::refit_plane(points, c, s, axis, cos_eps, sin_eps, tau, cos_normal, best, inliers);
   }
   std::sort(inliers.begin(), inliers.end());
   detail::orient_plane(best, axis);
