@@ -89,10 +89,9 @@ struct FpfhNeighborRows {
   std::vector<float> dist_sq;        ///< its squared distance [m^2]
 };
 
-}  // namespace detail
-
-inline FpfhResult compute_fpfh(const PointCloud& cloud, const FpfhSettings& settings,
-                               const std::vector<std::size_t>* indices) {
+/// Checks the cloud, the settings and the indices of compute_fpfh().
+inline void check_fpfh_inputs(const PointCloud& cloud, const FpfhSettings& settings,
+                              const std::vector<std::size_t>* indices) {
   PLUMB_CHECK(settings.radius > 0.0f && std::isfinite(settings.radius),
               "compute_fpfh: settings.radius = " << settings.radius << " must be > 0 and finite");
   PLUMB_CHECK(!std::isnan(settings.visible_side_tolerance), "compute_fpfh: settings.visible_side_tolerance is NaN");
@@ -110,6 +109,159 @@ inline FpfhResult compute_fpfh(const PointCloud& cloud, const FpfhSettings& sett
                                                                << " points");
     }
   }
+}
+
+/// The radius neighbourhoods compute_fpfh() needs: a row per point that needs an SPFH (the
+/// queries, then their neighbours), built by one radius search each.
+class FpfhNeighborhoods {
+ public:
+  static constexpr std::uint32_t kNoRow = std::numeric_limits<std::uint32_t>::max();
+
+  FpfhNeighborhoods(const PointCloud& cloud, const FpfhSettings& settings, const std::vector<std::uint8_t>& usable)
+      : row_of(cloud.size(), kNoRow), cloud_(cloud), settings_(settings), usable_(usable), tree_(cloud.points) {}
+
+  /// Rows for the usable `queries`, then for every neighbour in them.
+  void build(const std::vector<std::size_t>& queries) {
+    for (std::size_t p : queries) {
+      if (usable_[p] && row_of[p] == kNoRow) add_row(p);
+    }
+    const std::size_t num_query_rows = row_point.size();
+    for (std::size_t r = 0; r < num_query_rows; ++r) {
+      for (std::uint32_t e = rows.begin[r]; e < rows.begin[r + 1]; ++e) {
+        const std::uint32_t q = rows.index[e];
+        if (row_of[q] == kNoRow) add_row(q);
+      }
+    }
+  }
+
+  std::vector<std::uint32_t> row_of;     ///< row of each cloud point, or kNoRow
+  std::vector<std::uint32_t> row_point;  ///< cloud index of each row
+  std::vector<std::uint8_t> row_capped;  ///< 1: the cap dropped neighbours within the radius
+  FpfhNeighborRows rows;
+
+ private:
+  const PointCloud& cloud_;
+  const FpfhSettings& settings_;
+  const std::vector<std::uint8_t>& usable_;
+  const KdTree<3> tree_;
+  std::vector<std::size_t> found_idx_;
+  std::vector<float> found_d2_;
+  std::vector<std::pair<float, std::uint32_t>> cand_;
+
+  /// One radius search for point p; the row keeps its neighbours (self excluded, nearest
+  /// max_neighbors kept with self counted, as Open3D's hybrid search).
+  void add_row(std::size_t p) {
+    row_of[p] = static_cast<std::uint32_t>(row_point.size());
+    row_point.push_back(static_cast<std::uint32_t>(p));
+    const std::size_t m = tree_.radius(cloud_.points[p], settings_.radius, found_idx_, found_d2_, false);
+    cand_.clear();
+    bool self_found = false;
+    const bool visible_only = settings_.visible_side_tolerance >= 0.0f;
+    for (std::size_t j = 0; j < m; ++j) {
+      const std::size_t q = found_idx_[j];
+      if (q == p) {
+        self_found = true;
+        continue;
+      }
+      if (!usable_[q]) continue;
+      if (visible_only) {
+        const Vector3f d = cloud_.points[q] - cloud_.points[p];
+        if (cloud_.normals[p].dot(d) < -settings_.visible_side_tolerance ||
+            cloud_.normals[q].dot(d) > settings_.visible_side_tolerance) {
+          continue;
+        }
+      }
+      cand_.emplace_back(found_d2_[j], static_cast<std::uint32_t>(q));
+    }
+    // With the point itself counted, `cap` entries leave cap - 1 neighbours.
+    const std::size_t cap = settings_.max_neighbors;
+    const std::size_t keep = (cap == 0) ? cand_.size() : std::min(cand_.size(), cap - (self_found ? 1 : 0));
+    row_capped.push_back(keep < cand_.size() ? 1 : 0);
+    if (keep < cand_.size()) {
+      std::nth_element(cand_.begin(), cand_.begin() + static_cast<std::ptrdiff_t>(keep), cand_.end());
+      cand_.resize(keep);
+    }
+    for (const auto& c : cand_) {
+      rows.index.push_back(c.second);
+      rows.dist_sq.push_back(c.first);
+    }
+    rows.begin.push_back(static_cast<std::uint32_t>(rows.index.size()));
+  }
+
+};
+
+/// SPFH per row (Rusu 2009), kFpfhBins values a row, each sub-histogram normalised to 100: every
+/// neighbour adds 100 / (number of neighbours) to one bin of each feature.
+inline std::vector<float> compute_spfh(const PointCloud& cloud, const FpfhNeighborhoods& nb) {
+  constexpr std::uint32_t kNoRow = FpfhNeighborhoods::kNoRow;
+  const FpfhNeighborRows& rows = nb.rows;
+  const std::size_t num_rows = nb.row_point.size();
+  std::vector<float> incr(num_rows, 0.0f);
+  for (std::size_t r = 0; r < num_rows; ++r) {
+    const std::uint32_t count = rows.begin[r + 1] - rows.begin[r];
+    if (count > 0) incr[r] = 100.0f / static_cast<float>(count);
+  }
+  std::vector<float> spfh(num_rows * kFpfhBins, 0.0f);
+  auto add_bins = [&spfh, &incr](std::size_t r, const int bins[3]) {
+    float* h = &spfh[r * kFpfhBins];
+    const float inc = incr[r];
+    h[bins[0]] += inc;
+    h[kFpfhBinsPerFeature + bins[1]] += inc;
+    h[2 * kFpfhBinsPerFeature + bins[2]] += inc;
+  };
+  for (std::size_t r = 0; r < num_rows; ++r) {
+    const std::size_t p = nb.row_point[r];
+    const Vector3f& pp = cloud.points[p];
+    const Vector3f& np = cloud.normals[p];
+    for (std::uint32_t k = rows.begin[r]; k < rows.begin[r + 1]; ++k) {
+      const std::uint32_t q = rows.index[k];
+      const std::uint32_t rq = nb.row_of[q];
+      // Radius neighbourhoods are symmetric: when neither row was capped, q's row holds p, and
+      // the pair's features are computed once (at the smaller index) for both rows. A bin is a
+      // sum of equal increments, so the order of the additions does not change the result.
+      const bool both = rq != kNoRow && !nb.row_capped[r] && !nb.row_capped[rq];
+      if (both && q < p) continue;
+      int bins[3];
+      const bool mirrored = fpfh_pair_bins(pp, np, cloud.points[q], cloud.normals[q], bins);
+      add_bins(r, bins);
+      if (!both) continue;
+      if (!mirrored) fpfh_pair_bins(cloud.points[q], cloud.normals[q], pp, np, bins);
+      add_bins(rq, bins);
+    }
+  }
+  return spfh;
+}
+
+/// FPFH of the point of row r (Liu et al. 2022, eq. 1, with Open3D's weighting and normalisation,
+/// see the header): its SPFH plus its neighbours', weighted by 1 / squared distance.
+inline void fpfh_signature(const FpfhNeighborhoods& nb, const std::vector<float>& spfh, std::uint32_t r,
+                           FpfhSignature& sig) {
+  const FpfhNeighborRows& rows = nb.rows;
+  // float sums (4 lanes); 1e-6 relative, far below the bins' 1e-3 agreement with Open3D
+  float acc[kFpfhBins] = {};
+  for (std::uint32_t k = rows.begin[r]; k < rows.begin[r + 1]; ++k) {
+    const float d2 = rows.dist_sq[k];
+    if (d2 == 0.0f) continue;
+    const float wgt = 1.0f / d2;
+    const float* hq = &spfh[static_cast<std::size_t>(nb.row_of[rows.index[k]]) * kFpfhBins];
+    for (int j = 0; j < kFpfhBins; ++j) acc[j] += wgt * hq[j];
+  }
+  float scale[3];
+  for (int s = 0; s < 3; ++s) {
+    double sum = 0.0;
+    for (int j = 0; j < kFpfhBinsPerFeature; ++j) sum += acc[s * kFpfhBinsPerFeature + j];
+    scale[s] = sum != 0.0 ? static_cast<float>(100.0 / sum) : 0.0f;
+  }
+  const float* hp = &spfh[static_cast<std::size_t>(r) * kFpfhBins];
+  for (int j = 0; j < kFpfhBins; ++j) sig[j] = acc[j] * scale[j / kFpfhBinsPerFeature] + hp[j];
+}
+
+}  // namespace detail
+
+inline FpfhResult compute_fpfh(const PointCloud& cloud, const FpfhSettings& settings,
+                               const std::vector<std::size_t>* indices) {
+  detail::check_fpfh_inputs(cloud, settings, indices);
+  const std::size_t n = cloud.size();
 
   FpfhResult out;
   if (indices != nullptr) {
@@ -131,132 +283,20 @@ inline FpfhResult compute_fpfh(const PointCloud& cloud, const FpfhSettings& sett
     out.num_invalid = out.indices.size();
     return out;
   }
-  const KdTree<3> tree(cloud.points);
+  // The neighbourhoods of the queries and of their neighbours, then the SPFH of each.
+  detail::FpfhNeighborhoods nb(cloud, settings, usable);
+  nb.build(out.indices);
+  const std::vector<float> spfh = detail::compute_spfh(cloud, nb);
 
-  constexpr std::uint32_t kNoRow = std::numeric_limits<std::uint32_t>::max();
-  std::vector<std::uint32_t> row_of(n, kNoRow);
-  std::vector<std::uint32_t> row_point;   // cloud index of each row
-  std::vector<std::uint8_t> row_capped;   // 1: the cap dropped neighbours within the radius
-  detail::FpfhNeighborRows rows;
-  std::vector<std::size_t> found_idx;
-  std::vector<float> found_d2;
-  std::vector<std::pair<float, std::uint32_t>> cand;
-  const std::size_t cap = settings.max_neighbors;
-  const bool visible_only = settings.visible_side_tolerance >= 0.0f;
-
-  // One radius search per point that needs an SPFH; the row keeps its neighbours (self excluded,
-  // nearest `cap` kept with self counted, as Open3D's hybrid search).
-  auto add_row = [&](std::size_t p) {
-    row_of[p] = static_cast<std::uint32_t>(row_point.size());
-    row_point.push_back(static_cast<std::uint32_t>(p));
-    const std::size_t m = tree.radius(cloud.points[p], settings.radius, found_idx, found_d2, false);
-    cand.clear();
-    bool self_found = false;
-    for (std::size_t j = 0; j < m; ++j) {
-      const std::size_t q = found_idx[j];
-      if (q == p) {
-        self_found = true;
-        continue;
-      }
-      if (!usable[q]) continue;
-      if (visible_only) {
-        const Vector3f d = cloud.points[q] - cloud.points[p];
-        if (cloud.normals[p].dot(d) < -settings.visible_side_tolerance ||
-            cloud.normals[q].dot(d) > settings.visible_side_tolerance) {
-          continue;
-        }
-      }
-      cand.emplace_back(found_d2[j], static_cast<std::uint32_t>(q));
-    }
-    // With the point itself counted, `cap` entries leave cap - 1 neighbours.
-    const std::size_t keep =
-        (cap == 0) ? cand.size() : std::min(cand.size(), cap - (self_found ? 1 : 0));
-    row_capped.push_back(keep < cand.size() ? 1 : 0);
-    if (keep < cand.size()) {
-      std::nth_element(cand.begin(), cand.begin() + static_cast<std::ptrdiff_t>(keep), cand.end());
-      cand.resize(keep);
-    }
-    for (const auto& c : cand) {
-      rows.index.push_back(c.second);
-      rows.dist_sq.push_back(c.first);
-    }
-    rows.begin.push_back(static_cast<std::uint32_t>(rows.index.size()));
-  };
-
-  for (std::size_t p : out.indices) {
-    if (usable[p] && row_of[p] == kNoRow) add_row(p);
-  }
-  const std::size_t num_query_rows = row_point.size();
-  for (std::size_t r = 0; r < num_query_rows; ++r) {
-    for (std::uint32_t e = rows.begin[r]; e < rows.begin[r + 1]; ++e) {
-      const std::uint32_t q = rows.index[e];
-      if (row_of[q] == kNoRow) add_row(q);
-    }
-  }
-
-  // SPFH per row (Rusu 2009), each sub-histogram normalised to 100: every neighbour adds
-  // 100 / (number of neighbours) to one bin of each feature.
-  const std::size_t num_rows = row_point.size();
-  std::vector<float> incr(num_rows, 0.0f);
-  for (std::size_t r = 0; r < num_rows; ++r) {
-    const std::uint32_t count = rows.begin[r + 1] - rows.begin[r];
-    if (count > 0) incr[r] = 100.0f / static_cast<float>(count);
-  }
-  std::vector<float> spfh(num_rows * kFpfhBins, 0.0f);
-  auto add_bins = [&spfh, &incr](std::size_t r, const int bins[3]) {
-    float* h = &spfh[r * kFpfhBins];
-    const float inc = incr[r];
-    h[bins[0]] += inc;
-    h[kFpfhBinsPerFeature + bins[1]] += inc;
-    h[2 * kFpfhBinsPerFeature + bins[2]] += inc;
-  };
-  for (std::size_t r = 0; r < num_rows; ++r) {
-    const std::size_t p = row_point[r];
-    const Vector3f& pp = cloud.points[p];
-    const Vector3f& np = cloud.normals[p];
-    for (std::uint32_t k = rows.begin[r]; k < rows.begin[r + 1]; ++k) {
-      const std::uint32_t q = rows.index[k];
-      const std::uint32_t rq = row_of[q];
-      // Radius neighbourhoods are symmetric: when neither row was capped, q's row holds p, and
-      // the pair's features are computed once (at the smaller index) for both rows. A bin is a
-      // sum of equal increments, so the order of the additions does not change the result.
-      const bool both = rq != kNoRow && !row_capped[r] && !row_capped[rq];
-      if (both && q < p) continue;
-      int bins[3];
-      const bool mirrored = detail::fpfh_pair_bins(pp, np, cloud.points[q], cloud.normals[q], bins);
-      add_bins(r, bins);
-      if (!both) continue;
-      if (!mirrored) detail::fpfh_pair_bins(cloud.points[q], cloud.normals[q], pp, np, bins);
-      add_bins(rq, bins);
-    }
-  }
-
-  // FPFH (Liu et al. 2022, eq. 1, with Open3D's weighting and normalisation, see the header).
+  // The FPFH of every query with neighbours.
   for (std::size_t f = 0; f < out.indices.size(); ++f) {
     const std::size_t p = out.indices[f];
-    const std::uint32_t r = usable[p] ? row_of[p] : kNoRow;
-    if (r == kNoRow || rows.begin[r] == rows.begin[r + 1]) {
+    const std::uint32_t r = usable[p] ? nb.row_of[p] : detail::FpfhNeighborhoods::kNoRow;
+    if (r == detail::FpfhNeighborhoods::kNoRow || nb.rows.begin[r] == nb.rows.begin[r + 1]) {
       ++out.num_invalid;
       continue;
     }
-    // float sums (4 lanes); 1e-6 relative, far below the bins' 1e-3 agreement with Open3D
-    float acc[kFpfhBins] = {};
-    for (std::uint32_t k = rows.begin[r]; k < rows.begin[r + 1]; ++k) {
-      const float d2 = rows.dist_sq[k];
-      if (d2 == 0.0f) continue;
-      const float wgt = 1.0f / d2;
-      const float* hq = &spfh[static_cast<std::size_t>(row_of[rows.index[k]]) * kFpfhBins];
-      for (int j = 0; j < kFpfhBins; ++j) acc[j] += wgt * hq[j];
-    }
-    float scale[3];
-    for (int s = 0; s < 3; ++s) {
-      double sum = 0.0;
-      for (int j = 0; j < kFpfhBinsPerFeature; ++j) sum += acc[s * kFpfhBinsPerFeature + j];
-      scale[s] = sum != 0.0 ? static_cast<float>(100.0 / sum) : 0.0f;
-    }
-    const float* hp = &spfh[static_cast<std::size_t>(r) * kFpfhBins];
-    FpfhSignature& sig = out.features[f];
-    for (int j = 0; j < kFpfhBins; ++j) sig[j] = acc[j] * scale[j / kFpfhBinsPerFeature] + hp[j];
+    detail::fpfh_signature(nb, spfh, r, out.features[f]);
   }
   return out;
 }
