@@ -61,11 +61,192 @@ inline void push_feature(const PointCloud& cloud, std::size_t index, int row, Po
   if (cloud.has_times()) out.times.push_back(cloud.times[index]);
 }
 
+/// One ring of the range image, its points in column order, and the per-point state of the
+/// selection. Reused from ring to ring.
+struct LoamRing {
+  std::vector<int> col;                       // column of each point
+  std::vector<std::size_t> idx;               // its cloud index
+  std::vector<double> rng, cosv;              // its range; its cosine (NaN: not scored)
+  std::vector<char> usable, picked;           // not occluded / parallel; picked or suppressed
+  std::vector<std::pair<double, int>> order;  // (key, position) sorted; ties by position = column
+  int size() const { return static_cast<int>(col.size()); }
+};
+
+/// Position s in a ring as an index into its vectors.
+inline std::size_t ring_at(int s) { return static_cast<std::size_t>(s); }
+
+/// Gathers the points of image row `row` into `ring` and resets its per-point state.
+inline void gather_ring(const PointCloud& cloud, const RangeImage& image, int row, LoamRing& ring) {
+  ring.col.clear();
+  ring.idx.clear();
+  ring.rng.clear();
+  for (int c = 0; c < image.num_columns; ++c) {
+    const std::int32_t i = image.at(row, c);
+    if (i == RangeImage::kEmpty) continue;
+    PLUMB_CHECK(static_cast<std::size_t>(i) < cloud.size(),
+                "extract_loam_features: range image pixel holds index " << i << " beyond the cloud");
+    ring.col.push_back(c);
+    ring.idx.push_back(static_cast<std::size_t>(i));
+    ring.rng.push_back(image.range_at(row, c));
+  }
+  const std::size_t n = ring.col.size();
+  ring.usable.assign(n, 1);
+  ring.picked.assign(n, 0);
+  ring.cosv.assign(n, std::numeric_limits<double>::quiet_NaN());
+}
+
+/// Marks the ring's occluded and parallel-beam points unusable (LOAM), counting them in `f`.
+inline void mark_unreliable(const LoamFeatureSettings& settings, LoamRing& ring, LoamFeatures& f) {
+  const int n = ring.size();
+  const auto U = ring_at;
+  const std::vector<double>& rng = ring.rng;
+  std::vector<char>& usable = ring.usable;
+  // Occluded points (LOAM): the far side of a range jump between adjacent points.
+  for (int s = 0; s + 1 < n; ++s) {
+    if (ring.col[U(s + 1)] - ring.col[U(s)] > settings.max_neighbor_column_gap) continue;
+    const double dr = rng[U(s)] - rng[U(s + 1)];
+    if (dr > settings.occlusion_range_jump) {
+      for (int t = std::max(0, s - settings.occlusion_span + 1); t <= s; ++t) {
+        if (usable[U(t)]) { usable[U(t)] = 0; ++f.num_occluded; }
+      }
+    } else if (-dr > settings.occlusion_range_jump) {
+      for (int t = s + 1; t <= std::min(n - 1, s + settings.occlusion_span); ++t) {
+        if (usable[U(t)]) { usable[U(t)] = 0; ++f.num_occluded; }
+      }
+    }
+  }
+  // Parallel beams (LOAM): range differs from both adjacent points by a large fraction.
+  for (int s = 1; s + 1 < n; ++s) {
+    const double lim = settings.parallel_beam_ratio * rng[U(s)];
+    if (usable[U(s)] && std::abs(rng[U(s - 1)] - rng[U(s)]) > lim && std::abs(rng[U(s + 1)] - rng[U(s)]) > lim) {
+      usable[U(s)] = 0;
+      ++f.num_parallel;
+    }
+  }
+}
+
+/// Scores the ring's usable points with the cosine of Zhou et al. 2021, eq. 5, on the points k
+/// places before and after, counting them per sector and filling the plane and edge pools.
+inline void score_ring(const PointCloud& cloud, int num_columns, int row, const LoamFeatureSettings& settings,
+                       LoamRing& ring, LoamFeatures& f) {
+  const int n = ring.size();
+  const int k = settings.neighbor_offset;
+  const int max_gap = settings.max_neighbor_column_gap;
+  const auto U = ring_at;
+  const std::vector<int>& col = ring.col;
+  const std::vector<std::size_t>& idx = ring.idx;
+  int plane_pool_count = 0;
+  for (int s = k; s + k < n; ++s) {
+    if (!ring.usable[U(s)]) continue;
+    if (col[U(s)] - col[U(s - k)] > max_gap || col[U(s + k)] - col[U(s)] > max_gap) continue;
+    const double c = loam_cosine(cloud.points[idx[U(s - k)]].cast<double>(), cloud.points[idx[U(s)]].cast<double>(),
+                                 cloud.points[idx[U(s + k)]].cast<double>());
+    if (std::isnan(c)) continue;
+    ring.cosv[U(s)] = c;
+    const int sector = static_cast<int>(static_cast<long long>(col[U(s)]) * settings.num_sectors / num_columns);
+    LoamSectorCounts& sc = f.sector_counts[U(row * settings.num_sectors + sector)];
+    ++sc.num_scored;
+    ++f.num_scored;
+    if (c <= settings.plane_cos_max) {
+      ++sc.num_plane_interval;
+      ++f.num_plane_interval;
+      if (plane_pool_count++ % settings.plane_pool_stride == 0) push_feature(cloud, idx[U(s)], row, f.plane_pool);
+    }
+    if (std::abs(c) <= settings.edge_cos_abs_max) {
+      ++sc.num_edge_interval;
+      ++f.num_edge_interval;
+      push_feature(cloud, idx[U(s)], row, f.edge_pool);
+    }
+  }
+}
+
+/// Marks the point at position s and its neighbours within suppression_radius (up to a column gap) picked.
+inline void suppress_around(int s, const LoamFeatureSettings& settings, LoamRing& ring) {
+  const int n = ring.size();
+  const auto U = ring_at;
+  const int max_gap = settings.max_neighbor_column_gap;
+  ring.picked[U(s)] = 1;
+  for (int t = s + 1; t <= std::min(n - 1, s + settings.suppression_radius); ++t) {
+    if (ring.col[U(t)] - ring.col[U(t - 1)] > max_gap) break;
+    ring.picked[U(t)] = 1;
+  }
+  for (int t = s - 1; t >= std::max(0, s - settings.suppression_radius); --t) {
+    if (ring.col[U(t + 1)] - ring.col[U(t)] > max_gap) break;
+    ring.picked[U(t)] = 1;
+  }
+}
+
+/// Where picked features of one kind go: the first `limit` to `out`, the next `candidate_limit` to
+/// `candidates`.
+struct LoamPickTarget {
+  PointCloud& out;
+  std::vector<std::size_t>& indices;
+  std::size_t& count;
+  std::size_t limit;
+  PointCloud& candidates;
+  std::vector<std::size_t>& candidate_indices;
+  std::size_t& candidate_count;
+  std::size_t candidate_limit;
+};
+
+/// Picks the points of ring.order (sorted) not picked yet into `target`, suppressing around each.
+inline void pick_in_order(const PointCloud& cloud, int row, const LoamFeatureSettings& settings, LoamRing& ring,
+                          const LoamPickTarget& target) {
+  std::sort(ring.order.begin(), ring.order.end());
+  for (const auto& [key, s] : ring.order) {
+    if (ring.picked[ring_at(s)]) continue;
+    if (target.count < target.limit) {
+      push_feature(cloud, ring.idx[ring_at(s)], row, target.out, target.indices);
+      ++target.count;
+    } else if (target.candidate_count < target.candidate_limit) {
+      push_feature(cloud, ring.idx[ring_at(s)], row, target.candidates, target.candidate_indices);
+      ++target.candidate_count;
+    } else {
+      break;
+    }
+    suppress_around(s, settings, ring);
+  }
+}
+
+/// Selection per sector of the ring: edges first (they suppress plane picks next to them), then planes.
+inline void select_ring_features(const PointCloud& cloud, int num_columns, int row,
+                                 const LoamFeatureSettings& settings, LoamRing& ring, LoamFeatures& f) {
+  const int n = ring.size();
+  const auto U = ring_at;
+  const std::vector<double>& cosv = ring.cosv;
+  int begin = 0;
+  for (int sector = 0; sector < settings.num_sectors; ++sector) {
+    int end = begin;
+    while (end < n && static_cast<long long>(ring.col[U(end)]) * settings.num_sectors / num_columns == sector) {
+      ++end;
+    }
+    LoamSectorCounts& sc = f.sector_counts[U(row * settings.num_sectors + sector)];
+    ring.order.clear();
+    for (int s = begin; s < end; ++s) {
+      if (!std::isnan(cosv[U(s)]) && std::abs(cosv[U(s)]) <= settings.edge_cos_abs_max) {
+        ring.order.emplace_back(std::abs(cosv[U(s)]), s);
+      }
+    }
+    pick_in_order(cloud, row, settings, ring,
+                  {f.edges, f.edge_indices, sc.num_edges, static_cast<std::size_t>(settings.max_edges_per_sector),
+                   f.edge_candidates, f.edge_candidate_indices, sc.num_edge_candidates,
+                   static_cast<std::size_t>(settings.max_edge_candidates_per_sector)});
+    ring.order.clear();
+    for (int s = begin; s < end; ++s) {
+      if (!std::isnan(cosv[U(s)]) && cosv[U(s)] <= settings.plane_cos_max) ring.order.emplace_back(cosv[U(s)], s);
+    }
+    pick_in_order(cloud, row, settings, ring,
+                  {f.planes, f.plane_indices, sc.num_planes, static_cast<std::size_t>(settings.max_planes_per_sector),
+                   f.plane_candidates, f.plane_candidate_indices, sc.num_plane_candidates,
+                   static_cast<std::size_t>(settings.max_plane_candidates_per_sector)});
+    begin = end;
+  }
+}
+
 }  // namespace loam_detail
 
 inline LoamFeatures extract_loam_features(const PointCloud& cloud, const RangeImage& image,
                                           const LoamFeatureSettings& settings) {
-  using loam_detail::push_feature;
   cloud.check_consistent("extract_loam_features");
   loam_detail::check_feature_settings(settings);
   const std::size_t num_pixels =
@@ -80,148 +261,12 @@ inline LoamFeatures extract_loam_features(const PointCloud& cloud, const RangeIm
   f.num_sectors = settings.num_sectors;
   f.sector_counts.assign(static_cast<std::size_t>(image.num_rows) * static_cast<std::size_t>(settings.num_sectors),
                          LoamSectorCounts{});
-  const int k = settings.neighbor_offset;
-  const int max_gap = settings.max_neighbor_column_gap;
-  const double plane_max = settings.plane_cos_max;
-  const double edge_max = settings.edge_cos_abs_max;
-
-  // Per-ring scratch, reused.
-  std::vector<int> col;
-  std::vector<std::size_t> idx;
-  std::vector<double> rng, cosv;
-  std::vector<char> usable, picked;
-  std::vector<std::pair<double, int>> order;  // (key, position) sorted; ties by position = column
-
+  loam_detail::LoamRing ring;
   for (int row = 0; row < image.num_rows; ++row) {
-    col.clear();
-    idx.clear();
-    rng.clear();
-    for (int c = 0; c < image.num_columns; ++c) {
-      const std::int32_t i = image.at(row, c);
-      if (i == RangeImage::kEmpty) continue;
-      PLUMB_CHECK(static_cast<std::size_t>(i) < cloud.size(),
-                  "extract_loam_features: range image pixel holds index " << i << " beyond the cloud");
-      col.push_back(c);
-      idx.push_back(static_cast<std::size_t>(i));
-      rng.push_back(image.range_at(row, c));
-    }
-    const int n = static_cast<int>(col.size());
-    usable.assign(static_cast<std::size_t>(n), 1);
-    picked.assign(static_cast<std::size_t>(n), 0);
-    cosv.assign(static_cast<std::size_t>(n), std::numeric_limits<double>::quiet_NaN());
-    auto U = [](int s) { return static_cast<std::size_t>(s); };
-
-    // Occluded points (LOAM): the far side of a range jump between adjacent points.
-    for (int s = 0; s + 1 < n; ++s) {
-      if (col[U(s + 1)] - col[U(s)] > max_gap) continue;
-      const double dr = rng[U(s)] - rng[U(s + 1)];
-      if (dr > settings.occlusion_range_jump) {
-        for (int t = std::max(0, s - settings.occlusion_span + 1); t <= s; ++t) {
-          if (usable[U(t)]) { usable[U(t)] = 0; ++f.num_occluded; }
-        }
-      } else if (-dr > settings.occlusion_range_jump) {
-        for (int t = s + 1; t <= std::min(n - 1, s + settings.occlusion_span); ++t) {
-          if (usable[U(t)]) { usable[U(t)] = 0; ++f.num_occluded; }
-        }
-      }
-    }
-    // Parallel beams (LOAM): range differs from both adjacent points by a large fraction.
-    for (int s = 1; s + 1 < n; ++s) {
-      const double lim = settings.parallel_beam_ratio * rng[U(s)];
-      if (usable[U(s)] && std::abs(rng[U(s - 1)] - rng[U(s)]) > lim &&
-          std::abs(rng[U(s + 1)] - rng[U(s)]) > lim) {
-        usable[U(s)] = 0;
-        ++f.num_parallel;
-      }
-    }
-    // Zhou et al. 2021, eq. 5, on the points k places before and after.
-    int plane_pool_count = 0;
-    for (int s = k; s + k < n; ++s) {
-      if (!usable[U(s)]) continue;
-      if (col[U(s)] - col[U(s - k)] > max_gap || col[U(s + k)] - col[U(s)] > max_gap) continue;
-      const double c = loam_cosine(cloud.points[idx[U(s - k)]].cast<double>(),
-                                   cloud.points[idx[U(s)]].cast<double>(),
-                                   cloud.points[idx[U(s + k)]].cast<double>());
-      if (std::isnan(c)) continue;
-      cosv[U(s)] = c;
-      const int sector = static_cast<int>(static_cast<long long>(col[U(s)]) * settings.num_sectors /
-                                          image.num_columns);
-      LoamSectorCounts& sc = f.sector_counts[U(row * settings.num_sectors + sector)];
-      ++sc.num_scored;
-      ++f.num_scored;
-      if (c <= plane_max) {
-        ++sc.num_plane_interval;
-        ++f.num_plane_interval;
-        if (plane_pool_count++ % settings.plane_pool_stride == 0) {
-          push_feature(cloud, idx[U(s)], row, f.plane_pool);
-        }
-      }
-      if (std::abs(c) <= edge_max) {
-        ++sc.num_edge_interval;
-        ++f.num_edge_interval;
-        push_feature(cloud, idx[U(s)], row, f.edge_pool);
-      }
-    }
-
-    auto suppress = [&](int s) {
-      picked[U(s)] = 1;
-      for (int t = s + 1; t <= std::min(n - 1, s + settings.suppression_radius); ++t) {
-        if (col[U(t)] - col[U(t - 1)] > max_gap) break;
-        picked[U(t)] = 1;
-      }
-      for (int t = s - 1; t >= std::max(0, s - settings.suppression_radius); --t) {
-        if (col[U(t + 1)] - col[U(t)] > max_gap) break;
-        picked[U(t)] = 1;
-      }
-    };
-
-    // Selection per sector: edges first (they suppress plane picks next to them), then planes.
-    int begin = 0;
-    for (int sector = 0; sector < settings.num_sectors; ++sector) {
-      int end = begin;
-      while (end < n && static_cast<long long>(col[U(end)]) * settings.num_sectors / image.num_columns ==
-                            sector) {
-        ++end;
-      }
-      LoamSectorCounts& sc = f.sector_counts[U(row * settings.num_sectors + sector)];
-      order.clear();
-      for (int s = begin; s < end; ++s) {
-        if (!std::isnan(cosv[U(s)]) && std::abs(cosv[U(s)]) <= edge_max) order.emplace_back(std::abs(cosv[U(s)]), s);
-      }
-      std::sort(order.begin(), order.end());
-      for (const auto& [key, s] : order) {
-        if (picked[U(s)]) continue;
-        if (sc.num_edges < static_cast<std::size_t>(settings.max_edges_per_sector)) {
-          push_feature(cloud, idx[U(s)], row, f.edges, f.edge_indices);
-          ++sc.num_edges;
-        } else if (sc.num_edge_candidates < static_cast<std::size_t>(settings.max_edge_candidates_per_sector)) {
-          push_feature(cloud, idx[U(s)], row, f.edge_candidates, f.edge_candidate_indices);
-          ++sc.num_edge_candidates;
-        } else {
-          break;
-        }
-        suppress(s);
-      }
-      order.clear();
-      for (int s = begin; s < end; ++s) {
-        if (!std::isnan(cosv[U(s)]) && cosv[U(s)] <= plane_max) order.emplace_back(cosv[U(s)], s);
-      }
-      std::sort(order.begin(), order.end());
-      for (const auto& [key, s] : order) {
-        if (picked[U(s)]) continue;
-        if (sc.num_planes < static_cast<std::size_t>(settings.max_planes_per_sector)) {
-          push_feature(cloud, idx[U(s)], row, f.planes, f.plane_indices);
-          ++sc.num_planes;
-        } else if (sc.num_plane_candidates < static_cast<std::size_t>(settings.max_plane_candidates_per_sector)) {
-          push_feature(cloud, idx[U(s)], row, f.plane_candidates, f.plane_candidate_indices);
-          ++sc.num_plane_candidates;
-        } else {
-          break;
-        }
-        suppress(s);
-      }
-      begin = end;
-    }
+    loam_detail::gather_ring(cloud, image, row, ring);
+    loam_detail::mark_unreliable(settings, ring, f);
+    loam_detail::score_ring(cloud, image.num_columns, row, settings, ring, f);
+    loam_detail::select_ring_features(cloud, image.num_columns, row, settings, ring, f);
   }
   const bool any = !f.edges.empty() || !f.planes.empty();
   f.status = any ? Status::kOk : Status::kInsufficientData;
