@@ -70,6 +70,28 @@ std::vector<Vector2d> scan_normals(const std::vector<Vector2d>& pts, const Vecto
   return normals;
 }
 
+/// The frame's points in the height band, in the base frame, one per map cell of side `cell`.
+std::vector<Vector2d> band_scan(const PointCloud& frame, const Eigen::Isometry3f& T, const BimLocalizerSettings& s,
+                                double cell) {
+  std::vector<Vector2d> scan;
+  std::unordered_set<std::uint64_t> seen;
+  for (const Vector3f& pl : frame.points) {
+    if (!pl.allFinite() || pl.norm() > s.max_range) continue;
+    const Vector3f p = T * pl;
+    if (p.z() < s.slice_min || p.z() > s.slice_max) continue;
+    if (seen.insert(cell_key(cell_of(p.x(), cell), cell_of(p.y(), cell))).second) scan.emplace_back(p.x(), p.y());
+  }
+  return scan;
+}
+
+/// Up to 200 of the points, evenly spread.
+std::vector<Vector2d> probe_points(const std::vector<Vector2d>& scan) {
+  std::vector<Vector2d> probe;
+  const std::size_t num_probe = std::min<std::size_t>(scan.size(), 200);
+  for (std::size_t i = 0; i < num_probe; ++i) probe.push_back(scan[i * scan.size() / num_probe]);
+  return probe;
+}
+
 void check_settings(const BimLocalizerSettings& s) {
   PLUMB_CHECK(std::isfinite(s.slice_min) && std::isfinite(s.slice_max) && s.slice_min < s.slice_max,
               "BimLocalizer: slice_min = " << s.slice_min << " must be below slice_max = " << s.slice_max);
@@ -186,29 +208,10 @@ std::vector<int> BimLocalizer::storeys() const {
   return out;
 }
 
-BimLocalization BimLocalizer::localize(const PointCloud& frame, const Eigen::Isometry3d& T_base_lidar,
-                                       const std::optional<Vector2d>& hint, double hint_radius) const {
-  frame.check_consistent("BimLocalizer::localize: frame");
-  PLUMB_CHECK(T_base_lidar.matrix().allFinite(), "BimLocalizer::localize: T_base_lidar is not finite");
-  PLUMB_CHECK(!hint || (hint->allFinite() && std::isfinite(hint_radius) && hint_radius > 0.0),
-              "BimLocalizer::localize: the hint must be finite and its radius > 0");
-  BimLocalization out;
-  const auto t0 = std::chrono::steady_clock::now();
-
-  // The frame's points in the height band, in the base frame, one per map cell.
-  const double r = settings_.map.resolution;
-  const Eigen::Isometry3f T = T_base_lidar.cast<float>();
-  std::vector<Vector2d> scan;
-  std::unordered_set<std::uint64_t> seen;
-  for (const Vector3f& pl : frame.points) {
-    if (!pl.allFinite() || pl.norm() > settings_.max_range) continue;
-    const Vector3f p = T * pl;
-    if (p.z() < settings_.slice_min || p.z() > settings_.slice_max) continue;
-    if (seen.insert(cell_key(cell_of(p.x(), r), cell_of(p.y(), r))).second) scan.emplace_back(p.x(), p.y());
-  }
-
-  const std::vector<Vector2d> normals = scan_normals(scan, T_base_lidar.translation().head<2>(), 3.0 * r);
-
+BimLocalizer::StoreySearch BimLocalizer::search_storeys(const std::vector<Vector2d>& scan,
+                                                         const std::vector<Vector2d>& normals, const Vector2d& sensor,
+                                                         const std::optional<Vector2d>& hint, double hint_radius,
+                                                         BimLocalization& out) const {
   CorrelativeSearchSettings ss;
   ss.max_points = settings_.max_points;
   // With a hint, a weaker 2D match may still be confirmed in 3D (see min_score_hinted).
@@ -221,18 +224,10 @@ BimLocalization BimLocalizer::localize(const PointCloud& frame, const Eigen::Iso
     ss.region_radius = hint_radius;
   }
   // Best and second best over all storeys: another storey's pose always counts as "far".
-  double best = -1.0, second = 0.0;
-  const StoreyMap* best_map = nullptr;
-  Pose2 best_pose, second_pose;
-  const StoreyMap* second_map = nullptr;
-  bool any_data = false;
-  const Vector2d sensor = T_base_lidar.translation().head<2>();
+  StoreySearch found;
   // The search's free-space test runs on up to 200 of the points (evenly spread): it is called on
   // every pose that would become the best, thousands of times in a building of look-alike rooms.
-  std::vector<Vector2d> probe;
-  const std::size_t num_probe = std::min<std::size_t>(scan.size(), 200);
-  for (std::size_t i = 0; i < num_probe; ++i) probe.push_back(scan[i * scan.size() / num_probe]);
-  bool truncated = false;
+  const std::vector<Vector2d> probe = probe_points(scan);
   for (const StoreyMap& m : maps_) {
     ss.accept = nullptr;
     if (m.solid && settings_.search_see_through > 0.0) {
@@ -242,48 +237,37 @@ BimLocalization BimLocalizer::localize(const PointCloud& frame, const Eigen::Iso
     }
     const CorrelativeResult cr = m.map->match(scan, ss, normals);
     out.rejected_by_free_space += cr.rejected;
-    truncated = truncated || cr.truncated;
+    found.truncated = found.truncated || cr.truncated;
     out.num_points = cr.num_points;
     out.nodes_scored += cr.nodes_scored;
     if (cr.status == Status::kInsufficientData) continue;
-    any_data = true;
+    found.any_data = true;
     if (cr.status != Status::kOk) continue;
     auto offer_second = [&](double score, const Pose2& pose, const StoreyMap* map) {
-      if (score > second) {
-        second = score;
-        second_pose = pose;
-        second_map = map;
+      if (score > found.second) {
+        found.second = score;
+        found.second_pose = pose;
+        found.second_map = map;
       }
     };
-    if (cr.score > best) {
-      if (best_map) offer_second(best, best_pose, best_map);
-      best = cr.score;
-      best_pose = cr.pose;
-      best_map = &m;
+    if (cr.score > found.best) {
+      if (found.best_map) offer_second(found.best, found.best_pose, found.best_map);
+      found.best = cr.score;
+      found.best_pose = cr.pose;
+      found.best_map = &m;
     } else {
       offer_second(cr.score, cr.pose, &m);
     }
     if (cr.has_second) offer_second(cr.second_score, cr.second_pose, &m);
   }
-  out.seconds_search = seconds_since(t0);
-  if (!any_data) {
-    out.status = Status::kInsufficientData;
-    return out;
-  }
-  if (!best_map) {
-    out.status = Status::kRejected;  // nothing scored even the lowered floor (or nothing in the hint region)
-    return out;
-  }
-  out.storey = best_map->index;
-  out.score = best;
-  out.second_score = second;
-  out.T_bim_base_search = base_pose(best_pose, best_map->floor_z);
-  if (second_map) out.T_bim_base_second = base_pose(second_pose, second_map->floor_z);
-  const bool close_scores = second_map && second >= (1.0 - settings_.ambiguity_margin) * best;
+  return found;
+}
 
-  const auto t1 = std::chrono::steady_clock::now();
+const PointCloud* BimLocalizer::refine_found(const PointCloud& frame, const Eigen::Isometry3d& T_base_lidar,
+                                             const StoreySearch& found, bool close_scores, PointCloud& without_floor,
+                                             BimLocalization& out) const {
   // Where the model holds no floor, the floor the frame sees cannot be matched: refine without it.
-  PointCloud without_floor;
+  const Eigen::Isometry3f T = T_base_lidar.cast<float>();
   auto frame_for = [&](const StoreyMap* m) -> const PointCloud& {
     if (m->floor_modelled) return frame;
     if (without_floor.empty()) {
@@ -295,55 +279,55 @@ BimLocalization BimLocalizer::localize(const PointCloud& frame, const Eigen::Iso
     }
     return without_floor;
   };
-  const PointCloud& best_frame = frame_for(best_map);
+  const PointCloud& best_frame = frame_for(found.best_map);
   out.fine = refine_localization(best_frame, fine_, out.T_bim_base_search * T_base_lidar, settings_.fine);
   const PointCloud* result_frame = &best_frame;
   if (close_scores) {
     // Two places explain the floor-plan slice about equally: let the whole 3D frame decide.
-    const PointCloud& second_frame = frame_for(second_map);
+    const PointCloud& second_frame = frame_for(found.second_map);
     IcpResult other = refine_localization(second_frame, fine_, out.T_bim_base_second * T_base_lidar, settings_.fine);
     if (other.overlap > out.fine.overlap) {
       std::swap(out.fine, other);
       std::swap(out.T_bim_base_search, out.T_bim_base_second);
       std::swap(out.score, out.second_score);
-      out.storey = second_map->index;
+      out.storey = found.second_map->index;
       result_frame = &second_frame;
     }
     out.second_overlap = other.overlap;
     out.ambiguous = out.fine.overlap - other.overlap < settings_.ambiguity_overlap_margin ||
                     out.score < settings_.min_score_when_ambiguous;
   }
-  out.refine_starts = 1;
-  const bool hinted_weak = hint && out.score >= settings_.min_score_hinted && out.score < settings_.min_score;
-  // (An ambiguous result is rejected whatever its overlap: no retry.)
-  if (hinted_weak && !out.ambiguous && settings_.retry_shift > 0.0 && out.fine.overlap < settings_.min_overlap_hinted) {
-    // Before a weak hinted match is rejected for its overlap: the ICP may sit in a local optimum
-    // next to the true pose, along the direction the frame's walls constrain least. Try starts on
-    // either side of the 2D pose along it.
-    Eigen::Matrix2d walls_info = Eigen::Matrix2d::Zero();
-    for (const Vector2d& n : normals)
-      if (n.allFinite()) walls_info += n * n.transpose();
-    if (walls_info.trace() > 0.0) {
-      const Vector2d weak_base = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(walls_info).eigenvectors().col(0);
-      const Vector2d weak = out.T_bim_base_search.linear().topLeftCorner<2, 2>() * weak_base;
-      for (const double side : {1.0, -1.0}) {
-        Eigen::Isometry3d T_start = out.T_bim_base_search;
-        T_start.translation().head<2>() += side * settings_.retry_shift * weak;
-        IcpResult retry = refine_localization(*result_frame, fine_, T_start * T_base_lidar, settings_.fine);
-        ++out.refine_starts;
-        const Eigen::Isometry3d T_base = retry.T_target_source * T_base_lidar.inverse();
-        const double moved = (T_base.translation() - out.T_bim_base_search.translation()).norm();
-        const bool better =
-            retry.status == Status::kOk && (out.fine.status != Status::kOk || retry.overlap > out.fine.overlap);
-        if (better && moved <= settings_.max_refine_shift) out.fine = std::move(retry);
-      }
-    }
-  }
-  out.T_bim_base = out.fine.T_target_source * T_base_lidar.inverse();
-  out.seconds_fine = seconds_since(t1);
+  return result_frame;
+}
 
+void BimLocalizer::retry_refinement(const PointCloud& result_frame, const Eigen::Isometry3d& T_base_lidar,
+                                    const std::vector<Vector2d>& normals, BimLocalization& out) const {
+  // Before a weak hinted match is rejected for its overlap: the ICP may sit in a local optimum
+  // next to the true pose, along the direction the frame's walls constrain least. Try starts on
+  // either side of the 2D pose along it.
+  Eigen::Matrix2d walls_info = Eigen::Matrix2d::Zero();
+  for (const Vector2d& n : normals)
+    if (n.allFinite()) walls_info += n * n.transpose();
+  if (!(walls_info.trace() > 0.0)) return;
+  const Vector2d weak_base = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(walls_info).eigenvectors().col(0);
+  const Vector2d weak = out.T_bim_base_search.linear().topLeftCorner<2, 2>() * weak_base;
+  for (const double side : {1.0, -1.0}) {
+    Eigen::Isometry3d T_start = out.T_bim_base_search;
+    T_start.translation().head<2>() += side * settings_.retry_shift * weak;
+    IcpResult retry = refine_localization(result_frame, fine_, T_start * T_base_lidar, settings_.fine);
+    ++out.refine_starts;
+    const Eigen::Isometry3d T_base = retry.T_target_source * T_base_lidar.inverse();
+    const double moved = (T_base.translation() - out.T_bim_base_search.translation()).norm();
+    const bool better =
+        retry.status == Status::kOk && (out.fine.status != Status::kOk || retry.overlap > out.fine.overlap);
+    if (better && moved <= settings_.max_refine_shift) out.fine = std::move(retry);
+  }
+}
+
+void BimLocalizer::apply_gates(const std::vector<Vector2d>& scan, const Vector2d& sensor, const StoreySearch& found,
+                               bool hinted_weak, BimLocalization& out) const {
   const double shift = (out.T_bim_base.translation() - out.T_bim_base_search.translation()).norm();
-  const StoreyMap* result_map = best_map;
+  const StoreyMap* result_map = found.best_map;
   for (const StoreyMap& m : maps_)
     if (m.index == out.storey) result_map = &m;
   const Pose2 refined{out.T_bim_base.translation().x(), out.T_bim_base.translation().y(),
@@ -351,7 +335,7 @@ BimLocalization BimLocalizer::localize(const PointCloud& frame, const Eigen::Iso
   if (result_map->solid) {
     out.see_through = result_map->solid->see_through(scan, refined, sensor, settings_.see_through_margin);
   }
-  out.truncated = truncated;
+  out.truncated = found.truncated;
   const bool score_ok = out.score >= settings_.min_score || (hinted_weak && out.fine.overlap >= settings_.min_overlap_hinted);
   if (!score_ok || out.ambiguous || out.truncated || shift > settings_.max_refine_shift ||
       out.see_through > settings_.max_see_through) {
@@ -359,6 +343,56 @@ BimLocalization BimLocalizer::localize(const PointCloud& frame, const Eigen::Iso
   } else {
     out.status = out.fine.status;
   }
+}
+
+BimLocalization BimLocalizer::localize(const PointCloud& frame, const Eigen::Isometry3d& T_base_lidar,
+                                       const std::optional<Vector2d>& hint, double hint_radius) const {
+  frame.check_consistent("BimLocalizer::localize: frame");
+  PLUMB_CHECK(T_base_lidar.matrix().allFinite(), "BimLocalizer::localize: T_base_lidar is not finite");
+  PLUMB_CHECK(!hint || (hint->allFinite() && std::isfinite(hint_radius) && hint_radius > 0.0),
+              "BimLocalizer::localize: the hint must be finite and its radius > 0");
+  BimLocalization out;
+  const auto t0 = std::chrono::steady_clock::now();
+
+  // The frame's points in the height band, in the base frame, one per map cell, and their normals.
+  const double r = settings_.map.resolution;
+  const std::vector<Vector2d> scan = band_scan(frame, T_base_lidar.cast<float>(), settings_, r);
+  const std::vector<Vector2d> normals = scan_normals(scan, T_base_lidar.translation().head<2>(), 3.0 * r);
+
+  // The 2D search over every storey: the best pose and the best one away from it.
+  const Vector2d sensor = T_base_lidar.translation().head<2>();
+  const StoreySearch found = search_storeys(scan, normals, sensor, hint, hint_radius, out);
+  out.seconds_search = seconds_since(t0);
+  if (!found.any_data) {
+    out.status = Status::kInsufficientData;
+    return out;
+  }
+  if (!found.best_map) {
+    out.status = Status::kRejected;  // nothing scored even the lowered floor (or nothing in the hint region)
+    return out;
+  }
+  out.storey = found.best_map->index;
+  out.score = found.best;
+  out.second_score = found.second;
+  out.T_bim_base_search = base_pose(found.best_pose, found.best_map->floor_z);
+  if (found.second_map) out.T_bim_base_second = base_pose(found.second_pose, found.second_map->floor_z);
+  const bool close_scores = found.second_map && found.second >= (1.0 - settings_.ambiguity_margin) * found.best;
+
+  // The 3D refinement of the best pose (and of the second when the scores are close).
+  const auto t1 = std::chrono::steady_clock::now();
+  PointCloud without_floor;
+  const PointCloud* result_frame = refine_found(frame, T_base_lidar, found, close_scores, without_floor, out);
+  out.refine_starts = 1;
+  const bool hinted_weak = hint && out.score >= settings_.min_score_hinted && out.score < settings_.min_score;
+  // (An ambiguous result is rejected whatever its overlap: no retry.)
+  if (hinted_weak && !out.ambiguous && settings_.retry_shift > 0.0 && out.fine.overlap < settings_.min_overlap_hinted) {
+    retry_refinement(*result_frame, T_base_lidar, normals, out);
+  }
+  out.T_bim_base = out.fine.T_target_source * T_base_lidar.inverse();
+  out.seconds_fine = seconds_since(t1);
+
+  // The gates: score, ambiguity, truncated search, shift of the refinement, see-through.
+  apply_gates(scan, sensor, found, hinted_weak, out);
   return out;
 }
 

@@ -167,6 +167,33 @@ class BimLocalizer {
     /// ray at any height cannot pass, for the see-through gate.
     std::unique_ptr<CorrelativeMap2D> solid;
   };
+  /// The 2D search's outcome over all storeys.
+  struct StoreySearch {
+    double best = -1.0, second = 0.0;  ///< scores of the best pose and of the best one away from it
+    const StoreyMap* best_map = nullptr;
+    const StoreyMap* second_map = nullptr;
+    Pose2 best_pose, second_pose;
+    bool any_data = false;   ///< some storey had enough points to search
+    bool truncated = false;  ///< some storey's search gave up on poses seeing through walls
+  };
+  /// Searches every storey's map for the band points `scan` (counts go into `out`).
+  StoreySearch search_storeys(const std::vector<Vector2d>& scan, const std::vector<Vector2d>& normals,
+                              const Vector2d& sensor, const std::optional<Vector2d>& hint, double hint_radius,
+                              BimLocalization& out) const;
+  /// Refines out.T_bim_base_search in 3D into out.fine, and the second pose too when `close_scores`
+  /// (the higher overlap wins); returns the frame the result was refined with (`frame`, or it
+  /// without its floor points, kept in `without_floor`).
+  const PointCloud* refine_found(const PointCloud& frame, const Eigen::Isometry3d& T_base_lidar,
+                                 const StoreySearch& found, bool close_scores, PointCloud& without_floor,
+                                 BimLocalization& out) const;
+  /// Refines again from the 2D pose shifted by +-retry_shift along the direction the walls
+  /// constrain least, keeping a better result (settings_.retry_shift).
+  void retry_refinement(const PointCloud& result_frame, const Eigen::Isometry3d& T_base_lidar,
+                        const std::vector<Vector2d>& normals, BimLocalization& out) const;
+  /// Sets out.see_through, out.truncated and out.status from the gates of BimLocalizerSettings.
+  void apply_gates(const std::vector<Vector2d>& scan, const Vector2d& sensor, const StoreySearch& found,
+                   bool hinted_weak, BimLocalization& out) const;
+
   BimLocalizerSettings settings_;
   std::vector<StoreyMap> maps_;
   LocalizeTarget fine_;
