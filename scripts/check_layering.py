@@ -58,7 +58,6 @@ LONG_FILES = {
 MAX_FUNCTION_LINES = 150
 # "path:function" -> its length today (may shrink, may not grow; removed once within the limit).
 LONG_FUNCTIONS = {
-    "examples/cli/eval_command.cpp:run_eval": 152,
 }
 FUNCTION_GLOBS = ("include/**/*.hpp", "src/**/*.cpp", "src/**/*.hpp", "examples/**/*.cpp", "bench/**/*.cpp",
                   "fuzz/**/*.cpp")

@@ -58,20 +58,34 @@ void print_stats_row(const char* label, const eval::ErrorStats& s) {
               s.std, s.min, s.max, s.count);
 }
 
-void run_eval(const EvalOptions& o) {
+/// Everything `plumb eval` reports, computed from the two files.
+struct EvalResults {
+  Trajectory estimate, reference;       // as read
+  eval::AssociationResult associated;  // the associated pose pairs
+  eval::AlignMode align = eval::AlignMode::kNone;
+  eval::ApeResult ape;
+  eval::RpeResult rpe;
+  std::vector<eval::DriftSample> drift;  // at the asked poses, then at the end of the path
+  eval::KittiSegmentResult segments;
+};
+
+/// Reads the estimate and the reference in the chosen format.
+void read_trajectories(const EvalOptions& o, EvalResults& r) {
   io::TrajectoryReadSettings read_settings;
   read_settings.orthonormalize = o.orthonormalize;
-  Trajectory estimate, reference;
   if (o.format == "tum") {
     PLUMB_CHECK(o.estimate_times.empty() && o.reference_times.empty(),
                 "--est-times / --ref-times only apply to --format kitti (TUM files carry stamps)");
-    estimate = io::read_tum(o.estimate_path, read_settings);
-    reference = io::read_tum(o.reference_path, read_settings);
+    r.estimate = io::read_tum(o.estimate_path, read_settings);
+    r.reference = io::read_tum(o.reference_path, read_settings);
   } else {
-    estimate = io::read_kitti(o.estimate_path, o.estimate_times, read_settings);
-    reference = io::read_kitti(o.reference_path, o.reference_times, read_settings);
+    r.estimate = io::read_kitti(o.estimate_path, o.estimate_times, read_settings);
+    r.reference = io::read_kitti(o.reference_path, o.reference_times, read_settings);
   }
+}
 
+/// Associates the two trajectories and computes the APE, refusing an alignment they do not determine.
+void associate_and_align(const EvalOptions& o, EvalResults& r) {
   PLUMB_CHECK(o.rpe_unit != "frames" || o.rpe_delta == std::floor(o.rpe_delta),
               "--rpe-delta: " << o.rpe_delta << " is not a whole number of frames (use --rpe-unit m for metres)");
   // Library messages about the pair of trajectories say "associate: ..." or "umeyama: ...";
@@ -81,105 +95,122 @@ void run_eval(const EvalOptions& o) {
   association_settings.max_time_difference = o.max_time_difference;
   association_settings.time_offset = o.time_offset;
   association_settings.min_pair_fraction = o.min_pair_fraction;
-  eval::AssociationResult associated;
-  const eval::AlignMode align = parse_align(o.align);
+  r.align = parse_align(o.align);
   eval::ApeSettings ape_settings;
-  ape_settings.align = align;
-  eval::ApeResult ape;
+  ape_settings.align = r.align;
   try {
-    associated = eval::associate(estimate, reference, association_settings);
-    ape = eval::compute_ape(associated.estimate, associated.reference, ape_settings);
+    r.associated = eval::associate(r.estimate, r.reference, association_settings);
+    r.ape = eval::compute_ape(r.associated.estimate, r.associated.reference, ape_settings);
   } catch (const Error& e) {
     throw Error(inputs + e.what());
   }
-  const Trajectory& est = associated.estimate;
-  const Trajectory& ref = associated.reference;
+  const Trajectory& est = r.associated.estimate;
+  const Trajectory& ref = r.associated.reference;
   // A degenerate fit still returns a rotation, but an arbitrary one about the line of the
   // positions: every error after it would be made up.
-  if (align != eval::AlignMode::kNone && ape.status != Status::kOk) {
+  if (r.align != eval::AlignMode::kNone && r.ape.status != Status::kOk) {
     PLUMB_THROW(inputs << "--align " << o.align << " is not determined by the " << est.size()
                        << " associated positions ("
-                       << (ape.status == Status::kDegenerate ? "they lie on a line, so the rotation about it is free"
-                                                             : "too few poses")
+                       << (r.ape.status == Status::kDegenerate ? "they lie on a line, so the rotation about it is free"
+                                                               : "too few poses")
                        << "); use --align none, or trajectories that turn");
   }
   for (std::size_t index : o.drift_at) {
     PLUMB_CHECK(index < ref.size(), "--drift-at: pose index " << index << " is out of range: " << ref.size()
                                         << " pose pairs were associated (indices 0.." << ref.size() - 1 << ")");
   }
+}
 
+/// RPE, drift and KITTI segment errors of the associated pairs (after associate_and_align()).
+void compute_errors(const EvalOptions& o, EvalResults& r) {
+  const Trajectory& est = r.associated.estimate;
+  const Trajectory& ref = r.associated.reference;
   eval::RpeSettings rpe_settings;
   rpe_settings.delta = o.rpe_delta;
   rpe_settings.unit = o.rpe_unit == "m" ? eval::DeltaUnit::kMeters : eval::DeltaUnit::kFrames;
-  rpe_settings.align = align;
+  rpe_settings.align = r.align;
   rpe_settings.pairs_along = o.rpe_pairs_along == "ref" ? eval::PathSource::kReference : eval::PathSource::kEstimate;
-  const eval::RpeResult rpe = eval::compute_rpe(est, ref, rpe_settings);
+  r.rpe = eval::compute_rpe(est, ref, rpe_settings);
 
   // Drift of the aligned estimate, at the end of the path and where asked.
   const Trajectory aligned =
-      eval::apply_similarity(est, ape.alignment.T_ref_est, ape.alignment.scale);
+      eval::apply_similarity(est, r.ape.alignment.T_ref_est, r.ape.alignment.scale);
   std::vector<std::size_t> drift_indices = o.drift_at;
   for (double stamp : o.drift_at_time) {
     PLUMB_CHECK(ref.has_stamps(), "--drift-at-time needs stamps (TUM files or KITTI times files)");
     drift_indices.push_back(eval::nearest_index(ref, stamp));
   }
   drift_indices.push_back(ref.size() - 1);
-  const std::vector<eval::DriftSample> drift = eval::drift_at(aligned, ref, drift_indices);
+  r.drift = eval::drift_at(aligned, ref, drift_indices);
+
+  r.segments = eval::compute_kitti_segment_errors(aligned, ref);
+}
+
+/// Prints the results as one JSON object.
+void print_eval_json(const EvalOptions& o, const EvalResults& r) {
+  const Trajectory& est = r.associated.estimate;
+  const Trajectory& ref = r.associated.reference;
+  const eval::ApeResult& ape = r.ape;
+  const eval::RpeResult& rpe = r.rpe;
+  const std::vector<eval::DriftSample>& drift = r.drift;
   const eval::DriftSample& drift_end = drift.back();
-
-  const eval::KittiSegmentResult segments = eval::compute_kitti_segment_errors(aligned, ref);
-
-  if (o.json) {
-    nlohmann::json out;
-    out["ape"] = stats_json(ape.translation.stats);
-    out["ape_rotation_deg"] = stats_json(ape.rotation_deg.stats);
-    if (rpe.status == Status::kOk) {
-      out["rpe"] = stats_json(rpe.translation.stats);
-      out["rpe_rotation_deg"] = stats_json(rpe.rotation_deg.stats);
-    } else {
-      out["rpe"] = nullptr;
-      out["rpe_rotation_deg"] = nullptr;
-    }
-    out["drift_pct"] = drift_end.drift_pct;
-    nlohmann::json drift_json = nlohmann::json::array();
-    for (std::size_t k = 0; k + 1 < drift.size(); ++k) {
-      const eval::DriftSample& s = drift[k];
-      nlohmann::json item = {{"index", s.index}, {"path_length_m", s.path_length}, {"error_m", s.error},
-                             {"drift_pct", s.drift_pct}};
-      if (ref.has_stamps()) item["stamp"] = ref.stamps[s.index];
-      drift_json.push_back(item);
-    }
-    out["drift"] = drift_json;
-    out["path_length_m"] = drift_end.path_length;
-    const Eigen::Matrix3d R = ape.alignment.T_ref_est.linear();
-    const Eigen::Vector3d t = ape.alignment.T_ref_est.translation();
-    out["alignment"] = {{"mode", eval::to_string(align)},
-                        {"scale", ape.alignment.scale},
-                        {"status", to_string(ape.alignment.status)},
-                        {"rotation", {{R(0, 0), R(0, 1), R(0, 2)}, {R(1, 0), R(1, 1), R(1, 2)},
-                                      {R(2, 0), R(2, 1), R(2, 2)}}},
-                        {"translation", {t.x(), t.y(), t.z()}}};
-    out["association"] = {{"num_estimate", estimate.size()},
-                          {"num_reference", reference.size()},
-                          {"num_pairs", est.size()},
-                          {"by_stamp", associated.by_stamp}};
-    out["rpe_delta"] = {{"delta", o.rpe_delta}, {"unit", o.rpe_unit}, {"num_pairs", rpe.pairs.size()},
-                        {"along", o.rpe_pairs_along}};
-    if (segments.status == Status::kOk) {
-      out["kitti_segments"] = {{"translation_pct", segments.translation_pct},
-                               {"rotation_deg_per_m", segments.rotation_deg_per_m},
-                               {"num_segments", segments.segments.size()}};
-    } else {
-      out["kitti_segments"] = nullptr;
-    }
-    std::cout << out.dump() << '\n';
-    return;
+  const eval::KittiSegmentResult& segments = r.segments;
+  nlohmann::json out;
+  out["ape"] = stats_json(ape.translation.stats);
+  out["ape_rotation_deg"] = stats_json(ape.rotation_deg.stats);
+  if (rpe.status == Status::kOk) {
+    out["rpe"] = stats_json(rpe.translation.stats);
+    out["rpe_rotation_deg"] = stats_json(rpe.rotation_deg.stats);
+  } else {
+    out["rpe"] = nullptr;
+    out["rpe_rotation_deg"] = nullptr;
   }
+  out["drift_pct"] = drift_end.drift_pct;
+  nlohmann::json drift_json = nlohmann::json::array();
+  for (std::size_t k = 0; k + 1 < drift.size(); ++k) {
+    const eval::DriftSample& s = drift[k];
+    nlohmann::json item = {{"index", s.index}, {"path_length_m", s.path_length}, {"error_m", s.error},
+                           {"drift_pct", s.drift_pct}};
+    if (ref.has_stamps()) item["stamp"] = ref.stamps[s.index];
+    drift_json.push_back(item);
+  }
+  out["drift"] = drift_json;
+  out["path_length_m"] = drift_end.path_length;
+  const Eigen::Matrix3d R = ape.alignment.T_ref_est.linear();
+  const Eigen::Vector3d t = ape.alignment.T_ref_est.translation();
+  out["alignment"] = {{"mode", eval::to_string(r.align)},
+                      {"scale", ape.alignment.scale},
+                      {"status", to_string(ape.alignment.status)},
+                      {"rotation", {{R(0, 0), R(0, 1), R(0, 2)}, {R(1, 0), R(1, 1), R(1, 2)},
+                                    {R(2, 0), R(2, 1), R(2, 2)}}},
+                      {"translation", {t.x(), t.y(), t.z()}}};
+  out["association"] = {{"num_estimate", r.estimate.size()},
+                        {"num_reference", r.reference.size()},
+                        {"num_pairs", est.size()},
+                        {"by_stamp", r.associated.by_stamp}};
+  out["rpe_delta"] = {{"delta", o.rpe_delta}, {"unit", o.rpe_unit}, {"num_pairs", rpe.pairs.size()},
+                      {"along", o.rpe_pairs_along}};
+  if (segments.status == Status::kOk) {
+    out["kitti_segments"] = {{"translation_pct", segments.translation_pct},
+                             {"rotation_deg_per_m", segments.rotation_deg_per_m},
+                             {"num_segments", segments.segments.size()}};
+  } else {
+    out["kitti_segments"] = nullptr;
+  }
+  std::cout << out.dump() << '\n';
+}
 
-  std::printf("estimate : %s (%zu poses)\n", o.estimate_path.c_str(), estimate.size());
-  std::printf("reference: %s (%zu poses)\n", o.reference_path.c_str(), reference.size());
-  std::printf("associated %zu pose pairs %s\n", est.size(), associated.by_stamp ? "by stamp" : "by index");
-  std::printf("alignment: %s, scale %.9g (%s)\n\n", eval::to_string(align), ape.alignment.scale,
+/// Prints the results as a table, then the drift and the KITTI segment errors.
+void print_eval_table(const EvalOptions& o, const EvalResults& r) {
+  const eval::ApeResult& ape = r.ape;
+  const eval::RpeResult& rpe = r.rpe;
+  const std::vector<eval::DriftSample>& drift = r.drift;
+  const eval::KittiSegmentResult& segments = r.segments;
+  std::printf("estimate : %s (%zu poses)\n", o.estimate_path.c_str(), r.estimate.size());
+  std::printf("reference: %s (%zu poses)\n", o.reference_path.c_str(), r.reference.size());
+  std::printf("associated %zu pose pairs %s\n", r.associated.estimate.size(),
+              r.associated.by_stamp ? "by stamp" : "by index");
+  std::printf("alignment: %s, scale %.9g (%s)\n\n", eval::to_string(r.align), ape.alignment.scale,
               to_string(ape.alignment.status));
   std::printf("  %-16s %11s %11s %11s %11s %11s %11s %7s\n", "", "rmse", "mean", "median", "std", "min", "max",
               "count");
@@ -204,10 +235,22 @@ void run_eval(const EvalOptions& o) {
     }
   };
   for (std::size_t k = 0; k + 1 < drift.size(); ++k) print_drift("pose " + std::to_string(drift[k].index), drift[k]);
-  print_drift("the end", drift_end);
+  print_drift("the end", drift.back());
   if (segments.status == Status::kOk) {
     std::printf("KITTI segments (100..800 m): translation %.4f %%, rotation %.6f deg/m (%zu segments)\n",
                 segments.translation_pct, segments.rotation_deg_per_m, segments.segments.size());
+  }
+}
+
+void run_eval(const EvalOptions& o) {
+  EvalResults r;
+  read_trajectories(o, r);
+  associate_and_align(o, r);
+  compute_errors(o, r);
+  if (o.json) {
+    print_eval_json(o, r);
+  } else {
+    print_eval_table(o, r);
   }
 }
 
