@@ -174,6 +174,39 @@ struct VoxelKeyIndex {
   std::uint32_t index;
 };
 
+/// The end e of the run of equal keys in `sorted` (n items) that starts at b: the keys of [b, e)
+/// are equal, e == n or the key of e differs. `sum` is the double sum of the run's points.
+template <typename T, typename KeyOf, typename IndexOf>
+std::size_t voxel_run_end(const std::vector<Vector3f>& pts, const T* sorted, std::size_t n, std::size_t b,
+                          KeyOf key_of, IndexOf index_of, Vector3d& sum) {
+  const std::uint64_t key = key_of(sorted[b]);
+  std::size_t e = b + 1;
+  sum = pts[index_of(sorted[b])].template cast<double>();
+  while (e < n && key_of(sorted[e]) == key) {
+    sum += pts[index_of(sorted[e])].template cast<double>();
+    ++e;
+  }
+  return e;
+}
+
+/// Index of the point of the run [b, e) of `sorted` nearest to `c` (distances in double); ties
+/// keep the first (lowest index).
+template <typename T, typename IndexOf>
+std::size_t nearest_in_run(const std::vector<Vector3f>& pts, const T* sorted, std::size_t b, std::size_t e,
+                           const Vector3d& c, IndexOf index_of) {
+  std::size_t best = index_of(sorted[b]);
+  double best_d_sq = (pts[best].template cast<double>() - c).squaredNorm();
+  for (std::size_t j = b + 1; j < e; ++j) {
+    const std::size_t i = index_of(sorted[j]);
+    const double d_sq = (pts[i].template cast<double>() - c).squaredNorm();
+    if (d_sq < best_d_sq) {
+      best_d_sq = d_sq;
+      best = i;
+    }
+  }
+  return best;
+}
+
 /// One linear pass over runs of equal keys in `sorted` (ascending keys, ascending source index
 /// within a run): centroids in double, then the nearest point or the averaged fields.
 template <typename T, typename KeyOf, typename IndexOf>
@@ -183,21 +216,6 @@ void reduce_voxel_runs(const PointCloud& cloud, const T* sorted, std::size_t n, 
   const std::vector<Vector3f>& pts = cloud.points;
   const bool nearest_mode = settings.mode == VoxelMode::kNearestToCentroid;
   PointCloud& out = result.cloud;
-
-  // Index of the point nearest to centroid c in run [b, e); ties keep the first (lowest index).
-  auto nearest_in_run = [&](std::size_t b, std::size_t e, const Vector3d& c) {
-    std::size_t best = index_of(sorted[b]);
-    double best_d_sq = (pts[best].template cast<double>() - c).squaredNorm();
-    for (std::size_t j = b + 1; j < e; ++j) {
-      const std::size_t i = index_of(sorted[j]);
-      const double d_sq = (pts[i].template cast<double>() - c).squaredNorm();
-      if (d_sq < best_d_sq) {
-        best_d_sq = d_sq;
-        best = i;
-      }
-    }
-    return best;
-  };
 
   if (nearest_mode) {
     result.indices.reserve(n / 4);
@@ -212,13 +230,8 @@ void reduce_voxel_runs(const PointCloud& cloud, const T* sorted, std::size_t n, 
   std::vector<std::size_t>& kept = result.indices;
   std::size_t b = 0;
   while (b < n) {
-    const std::uint64_t key = key_of(sorted[b]);
-    std::size_t e = b + 1;
-    Vector3d sum = pts[index_of(sorted[b])].template cast<double>();
-    while (e < n && key_of(sorted[e]) == key) {
-      sum += pts[index_of(sorted[e])].template cast<double>();
-      ++e;
-    }
+    Vector3d sum;
+    const std::size_t e = voxel_run_end(pts, sorted, n, b, key_of, index_of, sum);
     ++result.num_voxels;
     const std::size_t count = e - b;
     if (count < settings.min_points_per_voxel) {
@@ -244,7 +257,7 @@ void reduce_voxel_runs(const PointCloud& cloud, const T* sorted, std::size_t n, 
     const double inv_count = 1.0 / static_cast<double>(count);
     const Vector3d centroid = sum * inv_count;
     if (nearest_mode) {
-      kept.push_back(nearest_in_run(b, e, centroid));
+      kept.push_back(nearest_in_run(pts, sorted, b, e, centroid, index_of));
       b = e;
       continue;
     }
@@ -252,7 +265,9 @@ void reduce_voxel_runs(const PointCloud& cloud, const T* sorted, std::size_t n, 
     out.points.push_back(centroid.cast<float>());
     std::size_t nearest = std::numeric_limits<std::size_t>::max();
     auto get_nearest = [&]() {
-      if (nearest == std::numeric_limits<std::size_t>::max()) nearest = nearest_in_run(b, e, centroid);
+      if (nearest == std::numeric_limits<std::size_t>::max()) {
+        nearest = nearest_in_run(pts, sorted, b, e, centroid, index_of);
+      }
       return nearest;
     };
     if (cloud.has_normals()) {
@@ -295,20 +310,16 @@ void reduce_voxel_runs(const PointCloud& cloud, const T* sorted, std::size_t n, 
   }
 }
 
-}  // namespace detail
+/// Bounding box of the finite points of a cloud and their number.
+struct FiniteBounds {
+  Vector3f lo;                 ///< componentwise minimum (meaningful when num_finite > 0)
+  Vector3f hi;                 ///< componentwise maximum (meaningful when num_finite > 0)
+  std::size_t num_finite = 0;  ///< points with three finite coordinates
+};
 
-inline VoxelGridResult voxel_grid(const PointCloud& cloud, const VoxelGridSettings& settings) {
-  const double leaf = settings.leaf_size;
-  PLUMB_CHECK(std::isfinite(leaf) && leaf > 0.0,
-              "voxel_grid: leaf_size must be finite and > 0, got " << leaf << " m");
-  PLUMB_CHECK(settings.min_points_per_voxel >= 1, "voxel_grid: min_points_per_voxel must be >= 1");
-  cloud.check_consistent("voxel_grid");
-
-  VoxelGridResult result;
-  const std::vector<Vector3f>& pts = cloud.points;
+/// The bounding box of the finite points of `pts` (float min/max are exact).
+inline FiniteBounds finite_bounds(const std::vector<Vector3f>& pts) {
   const std::size_t n = pts.size();
-
-  // Pass 1: bounding box of the finite points (float min/max are exact).
   float lo_x = std::numeric_limits<float>::infinity(), lo_y = lo_x, lo_z = lo_x;
   float hi_x = -lo_x, hi_y = hi_x, hi_z = hi_x;
   std::size_t num_finite = 0;
@@ -323,23 +334,21 @@ inline VoxelGridResult voxel_grid(const PointCloud& cloud, const VoxelGridSettin
     hi_z = std::max(hi_z, z);
     ++num_finite;
   }
-  const Vector3f lo(lo_x, lo_y, lo_z), hi(hi_x, hi_y, hi_z);
-  result.num_dropped_non_finite = n - num_finite;
-  if (num_finite == 0) {
-    result.status = Status::kInsufficientData;
-    return result;
-  }
-  const detail::VoxelKeyLayout layout =
-      detail::make_voxel_key_layout(lo.cast<double>(), hi.cast<double>(), leaf);
+  return FiniteBounds{Vector3f(lo_x, lo_y, lo_z), Vector3f(hi_x, hi_y, hi_z), num_finite};
+}
 
-  // Pass 2: keys and their radix histograms, then a stable radix sort (source order is kept
-  // inside a voxel) and one pass over the runs of equal keys. No hashing, no per-voxel allocation.
-  PLUMB_CHECK(n <= std::numeric_limits<std::uint32_t>::max(),
-              "voxel_grid: clouds of more than 2^32 - 1 points are not supported, got " << n);
-  const detail::VoxelKeyer keyer(layout);
-  detail::RadixPlan plan(layout.key_bits);
+/// Keys the `num_finite` finite points of `pts` (at least one, fewer than 2^32 points in all) on
+/// `layout`, sorts them by key with a stable radix sort (source order is kept inside a voxel) and
+/// calls `reduce(sorted, num_finite, key_of, index_of)`: `key_of(item)` is an item's voxel key,
+/// `index_of(item)` its index in `pts`. An item packs key and index into one word where they fit.
+template <typename Reduce>
+void sort_by_voxel_key(const std::vector<Vector3f>& pts, std::size_t num_finite, const VoxelKeyLayout& layout,
+                       Reduce&& reduce) {
+  const std::size_t n = pts.size();
+  const VoxelKeyer keyer(layout);
+  RadixPlan plan(layout.key_bits);
   const bool all_finite = num_finite == n;
-  const int index_bits = detail::bit_width_u64(static_cast<std::uint64_t>(n - 1));
+  const int index_bits = bit_width_u64(static_cast<std::uint64_t>(n - 1));
   if (layout.key_bits + index_bits <= 64) {
     // Packed: key in the high bits, source index in the low bits of one word.
     std::unique_ptr<std::uint64_t[]> items(new std::uint64_t[num_finite]);
@@ -352,28 +361,58 @@ inline VoxelGridResult voxel_grid(const PointCloud& cloud, const VoxelGridSettin
       items[m++] = (key << index_bits) | static_cast<std::uint64_t>(i);
     }
     auto key_of = [index_bits](std::uint64_t x) { return x >> index_bits; };
-    const std::uint64_t index_mask =
-        index_bits == 0 ? 0 : (~std::uint64_t{0} >> (64 - index_bits));
+    const std::uint64_t index_mask = index_bits == 0 ? 0 : (~std::uint64_t{0} >> (64 - index_bits));
     auto index_of = [index_mask](std::uint64_t x) { return static_cast<std::size_t>(x & index_mask); };
-    const std::uint64_t* sorted =
-        detail::radix_sort_by_key(items.get(), tmp.get(), num_finite, plan, key_of);
-    detail::reduce_voxel_runs(cloud, sorted, num_finite, key_of, index_of, settings, result);
+    const std::uint64_t* sorted = radix_sort_by_key(items.get(), tmp.get(), num_finite, plan, key_of);
+    reduce(sorted, num_finite, key_of, index_of);
   } else {
-    using Item = detail::VoxelKeyIndex;
-    std::unique_ptr<Item[]> items(new Item[num_finite]);
-    std::unique_ptr<Item[]> tmp(new Item[num_finite]);
+    std::unique_ptr<VoxelKeyIndex[]> items(new VoxelKeyIndex[num_finite]);
+    std::unique_ptr<VoxelKeyIndex[]> tmp(new VoxelKeyIndex[num_finite]);
     std::size_t m = 0;
     for (std::size_t i = 0; i < n; ++i) {
       if (!all_finite && !pts[i].allFinite()) continue;
       const std::uint64_t key = keyer.key(pts[i]);
       plan.count(key);
-      items[m++] = Item{key, static_cast<std::uint32_t>(i)};
+      items[m++] = VoxelKeyIndex{key, static_cast<std::uint32_t>(i)};
     }
-    auto key_of = [](const Item& x) { return x.key; };
-    auto index_of = [](const Item& x) { return static_cast<std::size_t>(x.index); };
-    const Item* sorted = detail::radix_sort_by_key(items.get(), tmp.get(), num_finite, plan, key_of);
-    detail::reduce_voxel_runs(cloud, sorted, num_finite, key_of, index_of, settings, result);
+    auto key_of = [](const VoxelKeyIndex& x) { return x.key; };
+    auto index_of = [](const VoxelKeyIndex& x) { return static_cast<std::size_t>(x.index); };
+    const VoxelKeyIndex* sorted = radix_sort_by_key(items.get(), tmp.get(), num_finite, plan, key_of);
+    reduce(sorted, num_finite, key_of, index_of);
   }
+}
+
+}  // namespace detail
+
+inline VoxelGridResult voxel_grid(const PointCloud& cloud, const VoxelGridSettings& settings) {
+  const double leaf = settings.leaf_size;
+  PLUMB_CHECK(std::isfinite(leaf) && leaf > 0.0,
+              "voxel_grid: leaf_size must be finite and > 0, got " << leaf << " m");
+  PLUMB_CHECK(settings.min_points_per_voxel >= 1, "voxel_grid: min_points_per_voxel must be >= 1");
+  cloud.check_consistent("voxel_grid");
+
+  VoxelGridResult result;
+  const std::vector<Vector3f>& pts = cloud.points;
+  const std::size_t n = pts.size();
+
+  // Pass 1: bounding box of the finite points.
+  const detail::FiniteBounds bounds = detail::finite_bounds(pts);
+  result.num_dropped_non_finite = n - bounds.num_finite;
+  if (bounds.num_finite == 0) {
+    result.status = Status::kInsufficientData;
+    return result;
+  }
+  const detail::VoxelKeyLayout layout =
+      detail::make_voxel_key_layout(bounds.lo.cast<double>(), bounds.hi.cast<double>(), leaf);
+
+  // Pass 2: keys and their radix histograms, then a stable radix sort (source order is kept
+  // inside a voxel) and one pass over the runs of equal keys. No hashing, no per-voxel allocation.
+  PLUMB_CHECK(n <= std::numeric_limits<std::uint32_t>::max(),
+              "voxel_grid: clouds of more than 2^32 - 1 points are not supported, got " << n);
+  detail::sort_by_voxel_key(pts, bounds.num_finite, layout,
+                            [&](const auto* sorted, std::size_t count, auto key_of, auto index_of) {
+                              detail::reduce_voxel_runs(cloud, sorted, count, key_of, index_of, settings, result);
+                            });
   result.status = result.cloud.empty() ? Status::kInsufficientData : Status::kOk;
   return result;
 }

@@ -23,28 +23,15 @@ void nearest_to_centroid_runs(const std::vector<Vector3f>& pts, const T* sorted,
                               std::vector<std::uint64_t>& kept_keys) {
   std::size_t b = 0;
   while (b < n) {
-    const std::uint64_t key = key_of(sorted[b]);
-    std::size_t e = b + 1;
-    Vector3d sum = pts[index_of(sorted[b])].template cast<double>();
-    while (e < n && key_of(sorted[e]) == key) {
-      sum += pts[index_of(sorted[e])].template cast<double>();
-      ++e;
-    }
+    Vector3d sum;
+    const std::size_t e = voxel_run_end(pts, sorted, n, b, key_of, index_of, sum);
     std::size_t best = index_of(sorted[b]);
     if (e - b > 1) {
       const Vector3d centroid = sum * (1.0 / static_cast<double>(e - b));
-      double best_d_sq = (pts[best].template cast<double>() - centroid).squaredNorm();
-      for (std::size_t j = b + 1; j < e; ++j) {
-        const std::size_t i = index_of(sorted[j]);
-        const double d_sq = (pts[i].template cast<double>() - centroid).squaredNorm();
-        if (d_sq < best_d_sq) {
-          best_d_sq = d_sq;
-          best = i;
-        }
-      }
+      best = nearest_in_run(pts, sorted, b, e, centroid, index_of);
     }
     kept.push_back(best);
-    kept_keys.push_back(key);
+    kept_keys.push_back(key_of(sorted[b]));
     b = e;
   }
 }
@@ -62,66 +49,18 @@ struct KeyedVoxelSample {
 /// (A sort-free variant, hashing voxels in input order, was measured slower on a 32-beam frame:
 /// its per-point updates of voxel sums jump across memory, the radix passes stream.)
 inline KeyedVoxelSample voxel_sample_keyed(const std::vector<Vector3f>& pts, double leaf) {
-  const std::size_t n = pts.size();
-  float lo_x = std::numeric_limits<float>::infinity(), lo_y = lo_x, lo_z = lo_x;
-  float hi_x = -lo_x, hi_y = hi_x, hi_z = hi_x;
-  std::size_t num_finite = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const float x = pts[i][0], y = pts[i][1], z = pts[i][2];
-    if (!((x - x) + (y - y) + (z - z) == 0.0f)) continue;  // NaN unless all three are finite
-    lo_x = std::min(lo_x, x);
-    lo_y = std::min(lo_y, y);
-    lo_z = std::min(lo_z, z);
-    hi_x = std::max(hi_x, x);
-    hi_y = std::max(hi_y, y);
-    hi_z = std::max(hi_z, z);
-    ++num_finite;
-  }
+  const FiniteBounds bounds = finite_bounds(pts);
   KeyedVoxelSample out;
-  std::vector<std::size_t>& kept = out.source;
-  if (num_finite == 0) return out;
-  PLUMB_CHECK(n <= std::numeric_limits<std::uint32_t>::max(),
-              "sample_frame: clouds of more than 2^32 - 1 points are not supported, got " << n);
-  out.layout = make_voxel_key_layout(Vector3f(lo_x, lo_y, lo_z).cast<double>(),
-                                                      Vector3f(hi_x, hi_y, hi_z).cast<double>(), leaf);
-  const VoxelKeyLayout& layout = out.layout;
-  const VoxelKeyer keyer(layout);
-  RadixPlan plan(layout.key_bits);
-  const bool all_finite = num_finite == n;
-  const int index_bits = bit_width_u64(static_cast<std::uint64_t>(n - 1));
-  kept.reserve(num_finite / 4);
-  out.keys.reserve(num_finite / 4);
-  if (layout.key_bits + index_bits <= 64) {
-    // Key in the high bits, input index in the low bits of one word.
-    std::unique_ptr<std::uint64_t[]> items(new std::uint64_t[num_finite]);
-    std::unique_ptr<std::uint64_t[]> tmp(new std::uint64_t[num_finite]);
-    std::size_t m = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!all_finite && !pts[i].allFinite()) continue;
-      const std::uint64_t key = keyer.key(pts[i]);
-      plan.count(key);
-      items[m++] = (key << index_bits) | static_cast<std::uint64_t>(i);
-    }
-    auto key_of = [index_bits](std::uint64_t x) { return x >> index_bits; };
-    const std::uint64_t index_mask = index_bits == 0 ? 0 : (~std::uint64_t{0} >> (64 - index_bits));
-    auto index_of = [index_mask](std::uint64_t x) { return static_cast<std::size_t>(x & index_mask); };
-    const std::uint64_t* sorted = radix_sort_by_key(items.get(), tmp.get(), num_finite, plan, key_of);
-    nearest_to_centroid_runs(pts, sorted, num_finite, key_of, index_of, kept, out.keys);
-  } else {
-    std::unique_ptr<VoxelKeyIndex[]> items(new VoxelKeyIndex[num_finite]);
-    std::unique_ptr<VoxelKeyIndex[]> tmp(new VoxelKeyIndex[num_finite]);
-    std::size_t m = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!all_finite && !pts[i].allFinite()) continue;
-      const std::uint64_t key = keyer.key(pts[i]);
-      plan.count(key);
-      items[m++] = VoxelKeyIndex{key, static_cast<std::uint32_t>(i)};
-    }
-    auto key_of = [](const VoxelKeyIndex& x) { return x.key; };
-    auto index_of = [](const VoxelKeyIndex& x) { return static_cast<std::size_t>(x.index); };
-    const VoxelKeyIndex* sorted = radix_sort_by_key(items.get(), tmp.get(), num_finite, plan, key_of);
-    nearest_to_centroid_runs(pts, sorted, num_finite, key_of, index_of, kept, out.keys);
-  }
+  if (bounds.num_finite == 0) return out;
+  PLUMB_CHECK(pts.size() <= std::numeric_limits<std::uint32_t>::max(),
+              "sample_frame: clouds of more than 2^32 - 1 points are not supported, got " << pts.size());
+  out.layout = make_voxel_key_layout(bounds.lo.cast<double>(), bounds.hi.cast<double>(), leaf);
+  out.source.reserve(bounds.num_finite / 4);
+  out.keys.reserve(bounds.num_finite / 4);
+  sort_by_voxel_key(pts, bounds.num_finite, out.layout,
+                    [&](const auto* sorted, std::size_t count, auto key_of, auto index_of) {
+                      nearest_to_centroid_runs(pts, sorted, count, key_of, index_of, out.source, out.keys);
+                    });
   return out;
 }
 
