@@ -119,6 +119,49 @@ bool Volume::bounds(Vector3d& lo, Vector3d& hi) const {
   return true;
 }
 
+namespace {
+
+/// Which sides of a plane a polygon has vertices on, beyond the tolerance.
+struct PlaneSides {
+  bool pos = false;  ///< a vertex lies more than eps on the positive side
+  bool neg = false;  ///< a vertex lies more than eps on the negative side
+};
+
+/// The signed distances `d` of the vertices of `poly` to the plane n . x + offset = 0, and the sides
+/// it has vertices on beyond `eps`.
+template <typename Normal>
+PlaneSides plane_distances(const std::vector<Vector3d>& poly, const Normal& n, double offset, double eps,
+                           std::vector<double>& d) {
+  PlaneSides sides;
+  d.resize(poly.size());
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    d[i] = n.dot(poly[i]) + offset;
+    sides.pos |= d[i] > eps;
+    sides.neg |= d[i] < -eps;
+  }
+  return sides;
+}
+
+/// Cuts `poly`, whose vertices lie at the signed distances `d` from a plane, into its part on the
+/// positive side (`pos_part`) and its part on the negative side (`neg_part`): a vertex within `eps`
+/// of the plane goes to both, and so does the crossing point of an edge from one side to the other.
+void split_polygon(const std::vector<Vector3d>& poly, const std::vector<double>& d, double eps,
+                   std::vector<Vector3d>& pos_part, std::vector<Vector3d>& neg_part) {
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    const std::size_t j = (i + 1) % poly.size();
+    const double di = d[i], dj = d[j];
+    if (di >= -eps) pos_part.push_back(poly[i]);
+    if (di <= eps) neg_part.push_back(poly[i]);
+    if ((di > eps && dj < -eps) || (di < -eps && dj > eps)) {
+      const Vector3d x = poly[i] + (poly[j] - poly[i]) * (di / (di - dj));
+      pos_part.push_back(x);
+      neg_part.push_back(x);
+    }
+  }
+}
+
+}  // namespace
+
 void subtract_volume(Soup& s, const Volume& vol, double eps) {
   Vector3d blo, bhi;
   const bool bounded = vol.bounds(blo, bhi);
@@ -146,33 +189,17 @@ void subtract_volume(Soup& s, const Volume& vol, double eps) {
     for (const auto& [pl, exclusive] : planes) {
       next.clear();
       for (auto& poly : active) {
-        bool pos = false, neg = false;
-        d.resize(poly.size());
-        for (std::size_t i = 0; i < poly.size(); ++i) {
-          d[i] = pl.head<3>().dot(poly[i]) + pl[3];
-          pos |= d[i] > eps;
-          neg |= d[i] < -eps;
-        }
-        if (!neg) {  // outside this plane (or on it: decided by the centroid test)
-          (exclusive && pos ? done : next).push_back(std::move(poly));
+        const PlaneSides sides = plane_distances(poly, pl.head<3>(), pl[3], eps, d);
+        if (!sides.neg) {  // outside this plane (or on it: decided by the centroid test)
+          (exclusive && sides.pos ? done : next).push_back(std::move(poly));
           continue;
         }
-        if (!pos) {
+        if (!sides.pos) {
           next.push_back(std::move(poly));
           continue;
         }
         std::vector<Vector3d> P, N;
-        for (std::size_t i = 0; i < poly.size(); ++i) {
-          const std::size_t j = (i + 1) % poly.size();
-          const double di = d[i], dj = d[j];
-          if (di >= -eps) P.push_back(poly[i]);
-          if (di <= eps) N.push_back(poly[i]);
-          if ((di > eps && dj < -eps) || (di < -eps && dj > eps)) {
-            const Vector3d x = poly[i] + (poly[j] - poly[i]) * (di / (di - dj));
-            P.push_back(x);
-            N.push_back(x);
-          }
-        }
+        split_polygon(poly, d, eps, P, N);
         if (P.size() >= 3) (exclusive ? done : next).push_back(std::move(P));
         if (N.size() >= 3) next.push_back(std::move(N));
       }
@@ -219,29 +246,13 @@ void split_by_plane(std::vector<std::vector<Vector3d>>& polys, const Vector3d& n
   out.reserve(polys.size());
   std::vector<double> dist;
   for (auto& poly : polys) {
-    bool pos = false, neg = false;
-    dist.resize(poly.size());
-    for (std::size_t i = 0; i < poly.size(); ++i) {
-      dist[i] = n.dot(poly[i]) + d;
-      pos |= dist[i] > eps;
-      neg |= dist[i] < -eps;
-    }
-    if (!pos || !neg) {
+    const PlaneSides sides = plane_distances(poly, n, d, eps, dist);
+    if (!sides.pos || !sides.neg) {
       out.push_back(std::move(poly));
       continue;
     }
     std::vector<Vector3d> P, N;
-    for (std::size_t i = 0; i < poly.size(); ++i) {
-      const std::size_t j = (i + 1) % poly.size();
-      const double di = dist[i], dj = dist[j];
-      if (di >= -eps) P.push_back(poly[i]);
-      if (di <= eps) N.push_back(poly[i]);
-      if ((di > eps && dj < -eps) || (di < -eps && dj > eps)) {
-        const Vector3d x = poly[i] + (poly[j] - poly[i]) * (di / (di - dj));
-        P.push_back(x);
-        N.push_back(x);
-      }
-    }
+    split_polygon(poly, dist, eps, P, N);
     if (P.size() >= 3) out.push_back(std::move(P));
     if (N.size() >= 3) out.push_back(std::move(N));
   }
