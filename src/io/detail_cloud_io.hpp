@@ -16,6 +16,7 @@
 #include <string>
 #include <string_view>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "plumb/io/input_file.hpp"
@@ -211,6 +212,31 @@ inline void append_column_value(std::string& out, const OutColumn& c, std::size_
   } else {
     append_number(out, load<std::int32_t>(p));
   }
+}
+
+/// Append rows 0 .. n-1 of `cols` as text: the values of a row separated by one space, one row a line.
+inline void append_ascii_rows(std::string& out, const std::vector<OutColumn>& cols, std::size_t n) {
+  out.reserve(out.size() + n * cols.size() * 12);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t k = 0; k < cols.size(); ++k) {
+      if (k > 0) out += ' ';
+      append_column_value(out, cols[k], i);
+    }
+    out += '\n';
+  }
+}
+
+/// The value `table` pairs with the header keyword `word`, in `out`; false (`out` untouched) when
+/// no entry names it.
+template <class E, std::size_t N>
+bool keyword_value(std::string_view word, const std::pair<std::string_view, E> (&table)[N], E& out) {
+  for (const auto& entry : table) {
+    if (word == entry.first) {
+      out = entry.second;
+      return true;
+    }
+  }
+  return false;
 }
 
 }  // namespace plumb::io::cloud_detail

@@ -140,13 +140,11 @@ HeaderLines read_header_lines(const char* data, std::size_t size, const std::str
       // Sensor pose; not kept (the cloud is in its own frame).
     } else if (key == "DATA") {
       expect_one();
-      if (tokens[1] == "ascii") {
-        h.kind = DataKind::kAscii;
-      } else if (tokens[1] == "binary") {
-        h.kind = DataKind::kBinary;
-      } else if (tokens[1] == "binary_compressed") {
-        h.kind = DataKind::kBinaryCompressed;
-      } else {
+      static constexpr std::pair<std::string_view, DataKind> kDataKinds[] = {
+          {"ascii", DataKind::kAscii},
+          {"binary", DataKind::kBinary},
+          {"binary_compressed", DataKind::kBinaryCompressed}};
+      if (!cloud_detail::keyword_value(tokens[1], kDataKinds, h.kind)) {
         PLUMB_THROW(name << ":" << cur.line << ": unknown DATA kind '" << tokens[1]
                          << "' (expected ascii, binary or binary_compressed)");
       }
@@ -563,14 +561,7 @@ std::string write_pcd_buffer(const PointCloud& cloud, const PcdWriteSettings& se
   switch (settings.encoding) {
     case PcdEncoding::kAscii: {
       out += "ascii\n";
-      out.reserve(out.size() + n * cols.size() * 12);
-      for (std::size_t i = 0; i < n; ++i) {
-        for (std::size_t k = 0; k < cols.size(); ++k) {
-          if (k > 0) out += ' ';
-          cloud_detail::append_column_value(out, cols[k], i);
-        }
-        out += '\n';
-      }
+      cloud_detail::append_ascii_rows(out, cols, n);
       break;
     }
     case PcdEncoding::kBinary: {

@@ -116,13 +116,11 @@ Header parse_header(const char* data, std::size_t size, const std::string& name)
       if (t.size() != 3 || t[2] != "1.0") {
         PLUMB_THROW(name << ":" << cur.line << ": expected 'format <kind> 1.0'");
       }
-      if (t[1] == "ascii") {
-        h.format = Format::kAscii;
-      } else if (t[1] == "binary_little_endian") {
-        h.format = Format::kBinaryLittleEndian;
-      } else if (t[1] == "binary_big_endian") {
-        h.format = Format::kBinaryBigEndian;
-      } else {
+      static constexpr std::pair<std::string_view, Format> kFormats[] = {
+          {"ascii", Format::kAscii},
+          {"binary_little_endian", Format::kBinaryLittleEndian},
+          {"binary_big_endian", Format::kBinaryBigEndian}};
+      if (!cloud_detail::keyword_value(t[1], kFormats, h.format)) {
         PLUMB_THROW(name << ":" << cur.line << ": unknown PLY format '" << t[1] << "'");
       }
       have_format = true;
@@ -434,14 +432,7 @@ std::string write_ply_buffer(const PointCloud& cloud, const PlyWriteSettings& se
   out += "end_header\n";
 
   if (ascii) {
-    out.reserve(out.size() + n * cols.size() * 12);
-    for (std::size_t i = 0; i < n; ++i) {
-      for (std::size_t k = 0; k < cols.size(); ++k) {
-        if (k > 0) out += ' ';
-        cloud_detail::append_column_value(out, cols[k], i);
-      }
-      out += '\n';
-    }
+    cloud_detail::append_ascii_rows(out, cols, n);
     return out;
   }
   std::size_t record = 0;
