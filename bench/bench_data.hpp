@@ -13,6 +13,20 @@
 
 #include <dlfcn.h>
 
+/// @brief `fn` where PCL is built, else nullptr: the peer argument of register_with_peers().
+#ifdef PLUMB_BENCH_HAVE_PCL
+#define PLUMB_BENCH_PCL(fn) (fn)
+#else
+#define PLUMB_BENCH_PCL(fn) nullptr
+#endif
+
+/// @brief `fn` where Open3D is built, else nullptr: the peer argument of register_with_peers().
+#ifdef PLUMB_BENCH_HAVE_OPEN3D
+#define PLUMB_BENCH_OPEN3D(fn) (fn)
+#else
+#define PLUMB_BENCH_OPEN3D(fn) nullptr
+#endif
+
 namespace plumb::bench {
 
 inline std::string data_dir() {
@@ -55,6 +69,34 @@ std::size_t time_frames_in_order(benchmark::State& state, std::size_t first, std
   }
   state.SetItemsProcessed(static_cast<std::int64_t>(frames));
   return frames;
+}
+
+/// @brief A benchmark function without arguments.
+using BenchmarkFn = void (*)(benchmark::State&);
+
+/// @brief Registers `fn` as benchmark `name`, reported in milliseconds.
+inline void register_ms(const std::string& name, BenchmarkFn fn) {
+  benchmark::RegisterBenchmark(name.c_str(), fn)->Unit(benchmark::kMillisecond);
+}
+
+/// @brief Registers `op`/plumb/`dataset`, then `op`/pcl/`dataset` and `op`/open3d/`dataset` for the
+///        peers that are built (pass PLUMB_BENCH_PCL(fn) and PLUMB_BENCH_OPEN3D(fn): nullptr without
+///        the peer), all in milliseconds.
+inline void register_with_peers(const std::string& op, const std::string& dataset, BenchmarkFn plumb_fn,
+                                BenchmarkFn pcl_fn, BenchmarkFn open3d_fn) {
+  register_ms(op + "/plumb/" + dataset, plumb_fn);
+  if (pcl_fn != nullptr) register_ms(op + "/pcl/" + dataset, pcl_fn);
+  if (open3d_fn != nullptr) register_ms(op + "/open3d/" + dataset, open3d_fn);
+}
+
+/// @brief The end of a benchmark main() once everything is registered: reads the command line,
+///        runs the benchmarks it selects and returns main()'s exit code (1 on an unknown argument).
+inline int run_benchmarks(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
 }
 
 }  // namespace plumb::bench

@@ -85,9 +85,5 @@ int main(int argc, char** argv) {
     benchmark::RegisterBenchmark((std::string("bim_sample_2cm/plumb/") + name).c_str(), sample_2cm, file)
         ->Unit(benchmark::kMillisecond);
   }
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  return plumb::bench::run_benchmarks(argc, argv);
 }

@@ -182,26 +182,9 @@ void bm_fpfh_open3d(benchmark::State& state) {
 int main(int argc, char** argv) {
   plumb::bench::single_thread_openmp();
   const std::string ds = kDataset;
-  auto reg = [](const std::string& name, void (*fn)(benchmark::State&)) {
-    benchmark::RegisterBenchmark(name.c_str(), fn)->Unit(benchmark::kMillisecond);
-  };
-  reg("normals/plumb/" + ds, bm_normals_plumb);
-#ifdef PLUMB_BENCH_HAVE_PCL
-  reg("normals/pcl/" + ds, bm_normals_pcl);
-#endif
-#ifdef PLUMB_BENCH_HAVE_OPEN3D
-  reg("normals/open3d/" + ds, bm_normals_open3d);
-#endif
-  reg("fpfh/plumb/" + ds, bm_fpfh_plumb);
-#ifdef PLUMB_BENCH_HAVE_PCL
-  reg("fpfh/pcl/" + ds, bm_fpfh_pcl);
-#endif
-#ifdef PLUMB_BENCH_HAVE_OPEN3D
-  reg("fpfh/open3d/" + ds, bm_fpfh_open3d);
-#endif
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  plumb::bench::register_with_peers("normals", ds, bm_normals_plumb, PLUMB_BENCH_PCL(bm_normals_pcl),
+                                    PLUMB_BENCH_OPEN3D(bm_normals_open3d));
+  plumb::bench::register_with_peers("fpfh", ds, bm_fpfh_plumb, PLUMB_BENCH_PCL(bm_fpfh_pcl),
+                                    PLUMB_BENCH_OPEN3D(bm_fpfh_open3d));
+  return plumb::bench::run_benchmarks(argc, argv);
 }

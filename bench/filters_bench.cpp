@@ -135,9 +135,5 @@ int main(int argc, char** argv) {
         ->Unit(benchmark::kMillisecond);
 #endif
   }
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  return plumb::bench::run_benchmarks(argc, argv);
 }

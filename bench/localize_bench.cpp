@@ -164,9 +164,5 @@ int main(int argc, char** argv) {
 #ifdef PLUMB_BENCH_HAVE_OPEN3D
   benchmark::RegisterBenchmark("bim_localize/open3d/fzk_haus", bm_open3d)->Unit(benchmark::kMillisecond)->Iterations(5);
 #endif
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  return plumb::bench::run_benchmarks(argc, argv);
 }

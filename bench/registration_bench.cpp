@@ -334,9 +334,6 @@ void bm_icp_open3d(benchmark::State& state) {
 int main(int argc, char** argv) {
   plumb::bench::single_thread_openmp();
   const std::string ds = kDataset;
-  auto reg_bm = [](const std::string& name, void (*fn)(benchmark::State&)) {
-    benchmark::RegisterBenchmark(name.c_str(), fn)->Unit(benchmark::kMillisecond);
-  };
   using GlobalBm = void (*)(benchmark::State&, const GlobalData& (*)());
   auto global_bm = [](const std::string& name, GlobalBm fn, const GlobalData& (*data)()) {
     benchmark::RegisterBenchmark(name.c_str(), fn, data)->Unit(benchmark::kMillisecond);
@@ -351,16 +348,7 @@ int main(int argc, char** argv) {
     global_bm("global_registration/open3d/" + suffix, bm_global_open3d, data);
 #endif
   }
-  reg_bm("icp/plumb/" + ds, bm_icp_plumb);
-#ifdef PLUMB_BENCH_HAVE_PCL
-  reg_bm("icp/pcl/" + ds, bm_icp_pcl);
-#endif
-#ifdef PLUMB_BENCH_HAVE_OPEN3D
-  reg_bm("icp/open3d/" + ds, bm_icp_open3d);
-#endif
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  plumb::bench::register_with_peers("icp", ds, bm_icp_plumb, PLUMB_BENCH_PCL(bm_icp_pcl),
+                                    PLUMB_BENCH_OPEN3D(bm_icp_open3d));
+  return plumb::bench::run_benchmarks(argc, argv);
 }
