@@ -5,20 +5,15 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 #include <string>
 
 #include "plumb/core/error.hpp"
 #include "plumb/io/carmen.hpp"
 
-#define FUZZ_REQUIRE(cond)                                            \
-  do {                                                                \
-    if (!(cond)) {                                                    \
-      std::fprintf(stderr, "carmen_fuzz: inconsistent: %s\n", #cond); \
-      std::abort();                                                   \
-    }                                                                 \
-  } while (false)
+#include "fuzz_require.hpp"
+
+// Names this target in the messages of FUZZ_REQUIRE.
+constexpr const char* kFuzzTarget = "carmen_fuzz";
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);

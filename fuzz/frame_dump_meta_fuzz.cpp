@@ -13,13 +13,10 @@
 #include "plumb/core/error.hpp"
 #include "plumb/io/frame_dump.hpp"
 
-#define FUZZ_REQUIRE(cond)                                                     \
-  do {                                                                         \
-    if (!(cond)) {                                                             \
-      std::fprintf(stderr, "frame_dump_meta_fuzz: inconsistent: %s\n", #cond); \
-      std::abort();                                                            \
-    }                                                                          \
-  } while (false)
+#include "fuzz_require.hpp"
+
+// Names this target in the messages of FUZZ_REQUIRE.
+constexpr const char* kFuzzTarget = "frame_dump_meta_fuzz";
 
 namespace {
 

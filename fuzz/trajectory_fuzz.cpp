@@ -6,21 +6,16 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 #include <string>
 #include <vector>
 
 #include "plumb/core/error.hpp"
 #include "plumb/io/trajectory.hpp"
 
-#define FUZZ_REQUIRE(cond)                                                \
-  do {                                                                    \
-    if (!(cond)) {                                                        \
-      std::fprintf(stderr, "trajectory_fuzz: inconsistent: %s\n", #cond); \
-      std::abort();                                                       \
-    }                                                                     \
-  } while (false)
+#include "fuzz_require.hpp"
+
+// Names this target in the messages of FUZZ_REQUIRE.
+constexpr const char* kFuzzTarget = "trajectory_fuzz";
 
 namespace {
 
