@@ -12,11 +12,9 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_runner.hpp"
-#include "plumb/bim/ifc.hpp"
-#include "plumb/bim/mesh.hpp"
 #include "plumb/io/frame_dump.hpp"
 #include "plumb/io/trajectory.hpp"
-#include "plumb/sim/scenario.hpp"
+#include "sim_site_run.hpp"
 #include "test_data.hpp"
 
 namespace plumb {
@@ -28,16 +26,7 @@ using Json = nlohmann::json;
 
 class LioCliTest : public test::CliTest {
  protected:
-  static void SetUpTestSuite() {
-    const std::string ifc = test::data_path("ifc/buildings/AC20-FZK-Haus.ifc");
-    if (!test::file_exists(ifc)) return;
-    dir_ = test::temp_path("lio_cli_dump_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    sim::ScenarioSettings s = sim::scenario_defaults(sim::ScenarioKind::kSite);
-    s.length = 3.0;
-    s.seed = 4;
-    sim::simulate_scenario(bim::build_mesh(bim::read_ifc(ifc)), dir_, s);
-  }
+  static void SetUpTestSuite() { test::simulate_fzk_site_run("lio_cli_dump", dir_); }
   static void TearDownTestSuite() {
     if (!dir_.empty()) fs::remove_all(dir_);
   }

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <random>
 #include <string>
@@ -16,6 +17,7 @@
 
 #include "plumb/core/error.hpp"
 #include "plumb/core/point_cloud.hpp"
+#include "test_data.hpp"
 
 namespace plumb::test {
 
@@ -84,4 +86,25 @@ inline PointCloud random_full_cloud(std::size_t n, unsigned seed, float scale, f
   return c;
 }
 
+/// @brief A round trip through a scratch file (temp_path(name)): `write(path, c, settings)` writes
+///        `c`, `read(path)` must give it back bit-exact; the file is removed after.
+template <class Settings, class Write, class Read>
+void expect_file_round_trip(const PointCloud& c, const Settings& settings, const std::string& name, Write&& write,
+                            Read&& read) {
+  const std::string file = temp_path(name);
+  write(file, c, settings);
+  expect_same_cloud(c, read(file));
+  std::remove(file.c_str());
+}
+
 }  // namespace plumb::test
+
+namespace plumb::io {
+
+// The helpers above by their short names in the reader and writer tests, which live in plumb::io.
+using test::expect_error;
+using test::expect_file_round_trip;
+using test::expect_same_cloud;
+using test::same_float;
+
+}  // namespace plumb::io

@@ -8,7 +8,6 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
-#include <random>
 #include <string>
 #include <vector>
 
@@ -18,9 +17,6 @@
 namespace plumb::io {
 namespace {
 
-using plumb::test::expect_error;
-using plumb::test::expect_same_cloud;
-using plumb::test::same_float;
 using plumb::test::temp_path;
 
 // ---- helpers ----------------------------------------------------------------------------------
@@ -28,6 +24,8 @@ using plumb::test::temp_path;
 PointCloud read_string(const std::string& bytes, const PcdReadSettings& settings = {}) {
   return read_pcd_buffer(bytes.data(), bytes.size(), "mem.pcd", settings);
 }
+
+PointCloud read_file(const std::string& path) { return read_pcd(path); }
 
 template <class T>
 void append_raw(std::string& out, T v) {
@@ -190,10 +188,7 @@ TEST(PcdTest, RealFileRoundTripsInEveryEncoding) {
   for (PcdEncoding e : {PcdEncoding::kAscii, PcdEncoding::kBinary, PcdEncoding::kBinaryCompressed}) {
     PcdWriteSettings ws;
     ws.encoding = e;
-    const std::string file = temp_path("pcd_real_roundtrip.pcd");
-    write_pcd(file, c, ws);
-    expect_same_cloud(c, read_pcd(file));
-    std::remove(file.c_str());
+    expect_file_round_trip(c, ws, "pcd_real_roundtrip.pcd", write_pcd, read_file);
   }
 }
 
@@ -205,10 +200,7 @@ TEST(PcdTest, RoundTripIsExactInEveryEncoding) {
     SCOPED_TRACE(static_cast<int>(e));
     PcdWriteSettings ws;
     ws.encoding = e;
-    const std::string file = temp_path("pcd_roundtrip.pcd");
-    write_pcd(file, c, ws);
-    expect_same_cloud(c, read_pcd(file));
-    std::remove(file.c_str());
+    expect_file_round_trip(c, ws, "pcd_roundtrip.pcd", write_pcd, read_file);
     expect_same_cloud(c, read_string(write_pcd_buffer(c, ws)));
   }
 }

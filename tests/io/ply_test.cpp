@@ -8,7 +8,6 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
-#include <random>
 #include <string>
 #include <vector>
 
@@ -18,9 +17,6 @@
 namespace plumb::io {
 namespace {
 
-using plumb::test::expect_error;
-using plumb::test::expect_same_cloud;
-using plumb::test::same_float;
 using plumb::test::temp_path;
 
 PointCloud read_string(const std::string& bytes) { return read_ply_buffer(bytes.data(), bytes.size(), "mem.ply"); }
@@ -196,10 +192,7 @@ TEST(PlyTest, RoundTripIsExactInBothEncodings) {
     SCOPED_TRACE(static_cast<int>(e));
     PlyWriteSettings ws;
     ws.encoding = e;
-    const std::string file = temp_path("ply_roundtrip.ply");
-    write_ply(file, c, ws);
-    expect_same_cloud(c, read_ply(file));
-    std::remove(file.c_str());
+    expect_file_round_trip(c, ws, "ply_roundtrip.ply", write_ply, read_ply);
     PointCloud xyz;
     xyz.points = c.points;
     expect_same_cloud(xyz, read_string(write_ply_buffer(xyz, ws)));
