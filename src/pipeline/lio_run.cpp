@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "plumb/core/error.hpp"
+#include "plumb/core/types.hpp"
 #include "plumb/eval/metrics.hpp"
 #include "plumb/pipeline/run.hpp"
 
@@ -34,7 +35,7 @@ LioInput prepare(const io::FrameDumpReader& dump, const LioRunSettings& settings
   const std::vector<double>& elevations = dump.meta().lidar.elevations_rad;
   if (!elevations.empty()) {
     in.lio.image.vertical_angles_deg.clear();
-    for (double e : elevations) in.lio.image.vertical_angles_deg.push_back(e * 180.0 / 3.14159265358979323846);
+    for (double e : elevations) in.lio.image.vertical_angles_deg.push_back(e * 180.0 / kPi);
   }
   const std::size_t n = settings.max_frames > 0 ? std::min(settings.max_frames, dump.num_frames()) : dump.num_frames();
   report.frames_requested = n;
