@@ -2,7 +2,8 @@
 // Accuracy of the 2D scan-matching odometry (ScanOdometry, defaults) on the shared CARMEN logs and
 // on degraded variants of them (beams at 1 deg, wheel slip, an odometry prior held for 10 s): one
 // run over the whole log per benchmark; the counters are the mean relation errors against the
-// log's corrected poses over 1 and 10 scans (cm, deg), the raw odometry's over 10 scans, and the
+// log's corrected poses over 1, 10 and 50 scans (cm, deg), the raw odometry's over the same spans
+// (how each source's error grows with the span), and the
 // scans matched from a prior-free start or fallen back to the odometry; `_fused` runs are the same
 // with ScanOdometrySettings::fuse_prior on. CSM's figures on the same
 // logs are in laser2d/csm/csm_reference.json (see docs/results.md).
@@ -38,13 +39,22 @@ void BM_ScanOdometryAccuracy(benchmark::State& state, const std::string& log_nam
   }
   const auto e1 = plumb::test::relation_error(r.poses, log.corrected, 1);
   const auto e10 = plumb::test::relation_error(r.poses, log.corrected, 10);
+  const auto e50 = plumb::test::relation_error(r.poses, log.corrected, 50);
+  const auto o1 = plumb::test::relation_error(log.odometry, log.corrected, 1);
   const auto o10 = plumb::test::relation_error(log.odometry, log.corrected, 10);
+  const auto o50 = plumb::test::relation_error(log.odometry, log.corrected, 50);
   state.counters["t1_cm"] = e1.trans_cm;
   state.counters["r1_deg"] = e1.rot_deg;
   state.counters["t10_cm"] = e10.trans_cm;
   state.counters["r10_deg"] = e10.rot_deg;
+  state.counters["t50_cm"] = e50.trans_cm;
+  state.counters["r50_deg"] = e50.rot_deg;
+  state.counters["odom_t1_cm"] = o1.trans_cm;
+  state.counters["odom_r1_deg"] = o1.rot_deg;
   state.counters["odom_t10_cm"] = o10.trans_cm;
   state.counters["odom_r10_deg"] = o10.rot_deg;
+  state.counters["odom_t50_cm"] = o50.trans_cm;
+  state.counters["odom_r50_deg"] = o50.rot_deg;
   state.counters["prior_free"] = static_cast<double>(r.num_prior_free);
   state.counters["fallbacks"] = static_cast<double>(r.num_fallbacks);
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * log.scans.size()));
