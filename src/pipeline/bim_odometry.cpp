@@ -155,9 +155,7 @@ void BimOdometry::correct(const PointCloud& lidar_frame, BimFrameResult& out) {
   const auto t1 = std::chrono::steady_clock::now();
   out.anchor_attempted = true;
   const Eigen::Isometry3d T_pred = composer_.pose() * settings_.T_base_lidar;
-  IcpSettings icp_settings = settings_.icp;
-  icp_settings.keep_correspondences = true;  // the information matrix below is built on them
-  const IcpResult icp = align_icp(keys, *bim_, *bim_tree_, T_pred, icp_settings);
+  const IcpResult icp = align_icp(keys, *bim_, *bim_tree_, T_pred, settings_.icp);
   out.icp_status = icp.status;
   out.icp_overlap = icp.overlap;
   out.icp_inliers = icp.num_inliers;
@@ -167,22 +165,18 @@ void BimOdometry::correct(const PointCloud& lidar_frame, BimFrameResult& out) {
   out.registered = true;
   out.T_bim_base_registered = icp.T_target_source * settings_.T_base_lidar.inverse();
 
-  // Information of the result from its final correspondences, first about the robot's position c
-  // (so the rank test compares like with like), then moved to the world-origin left perturbation.
-  // ICP's final pairs: every key point within the final correspondence distance of the model.
+  // Information of the result: ICP's normal matrix at its final correspondences, its rotation
+  // moved from the pairs' centroid m to the robot's position c (so the rank test compares like
+  // with like), ordered translation then rotation, then moved to the world-origin left perturbation.
+  // A motion (w, v_c) about c is (w, v_c + w x (m - c)) about m.
   const Eigen::Isometry3d& T = icp.T_target_source;
   const Vector3d c = (T * settings_.T_base_lidar.inverse()).translation();
-  Matrix6d H = Matrix6d::Zero();
-  std::size_t n = 0;
-  for (const IcpCorrespondence& pair : icp.correspondences) {
-    const Vector3d normal = bim_->normals[pair.target_index].cast<double>();
-    if (!normal.allFinite()) continue;
-    Vector6d J;
-    J.head<3>() = normal;
-    J.tail<3>() = (pair.x - c).cross(normal);
-    H.noalias() += J * J.transpose();
-    ++n;
-  }
+  Matrix6d A = Matrix6d::Zero();  // [w; v_m] = A [v_c; w]
+  A.block<3, 3>(0, 3) = Matrix3d::Identity();
+  A.block<3, 3>(3, 0) = Matrix3d::Identity();
+  A.block<3, 3>(3, 3) = -hat(icp.normal_matrix_pivot - c);
+  Matrix6d H = A.transpose() * icp.normal_matrix * A;
+  const std::size_t n = icp.num_inliers;
   if (n < settings_.min_anchor_inliers) return;
   const double scale = std::min(1.0, settings_.anchor_effective_points / static_cast<double>(n)) /
                        (settings_.anchor_sigma * settings_.anchor_sigma);

@@ -106,15 +106,15 @@ double icp_residual(const IcpPair& pr, bool point_to_plane) {
   return point_to_plane ? pr.n.dot(pr.x - pr.q) : (pr.x - pr.q).norm();
 }
 
-/// Smallest eigenvalue of the normal matrix J^T J / n, rotation taken about the pairs' centroid.
-double icp_degeneracy(const std::vector<IcpPair>& pairs, bool point_to_plane) {
-  if (pairs.empty()) return 0.0;
-  Vector3d c = Vector3d::Zero();
-  for (const IcpPair& pr : pairs) c += pr.x;
-  c /= static_cast<double>(pairs.size());
+/// The normal matrix J^T J of the pairs' residuals, rotation about the pairs' centroid (`pivot`).
+Matrix6d icp_normal_matrix(const std::vector<IcpPair>& pairs, bool point_to_plane, Vector3d& pivot) {
+  pivot.setZero();
   Matrix6d H = Matrix6d::Zero();
+  if (pairs.empty()) return H;
+  for (const IcpPair& pr : pairs) pivot += pr.x;
+  pivot /= static_cast<double>(pairs.size());
   for (const IcpPair& pr : pairs) {
-    const Vector3d x = pr.x - c;
+    const Vector3d x = pr.x - pivot;
     if (point_to_plane) {
       Vector6d J;
       J << x.cross(pr.n), pr.n;
@@ -125,7 +125,13 @@ double icp_degeneracy(const std::vector<IcpPair>& pairs, bool point_to_plane) {
       H.noalias() += J.transpose() * J;
     }
   }
-  H /= static_cast<double>(pairs.size());
+  return H;
+}
+
+/// Smallest eigenvalue of the normal matrix divided by the number of pairs.
+double icp_degeneracy(const Matrix6d& normal_matrix, std::size_t num_pairs) {
+  if (num_pairs == 0) return 0.0;
+  const Matrix6d H = normal_matrix / static_cast<double>(num_pairs);
   Eigen::SelfAdjointEigenSolver<Matrix6d> es(H, Eigen::EigenvaluesOnly);
   return es.info() == Eigen::Success ? std::max(0.0, es.eigenvalues()(0)) : 0.0;
 }
@@ -335,7 +341,8 @@ IcpResult align_icp(const PointCloud& source, const PointCloud& target, const Kd
       sum_sq += r * r;
     }
     out.rmse = std::sqrt(sum_sq / static_cast<double>(pairs.size()));
-    out.degeneracy = detail::icp_degeneracy(pairs, point_to_plane);
+    out.normal_matrix = detail::icp_normal_matrix(pairs, point_to_plane, out.normal_matrix_pivot);
+    out.degeneracy = detail::icp_degeneracy(out.normal_matrix, pairs.size());
   }
   if (settings.keep_correspondences) {
     out.correspondences.reserve(pairs.size());

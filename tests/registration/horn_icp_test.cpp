@@ -279,6 +279,59 @@ TEST(IcpTest, DegeneracyIndicatorFlagsSinglePlane) {
   EXPECT_EQ(rr.status, Status::kOk);
 }
 
+// The normal matrix is J^T J of the metric's residuals at the final pairs, J by central
+// differences of each residual under the documented motion about the documented pivot; the
+// degeneracy is its smallest eigenvalue per pair. A single plane leaves it rank 3.
+TEST(IcpTest, NormalMatrixIsTheResidualsJacobianProduct) {
+  const PointCloud target = room_cloud(0.1, 3);
+  Rng rng(5);
+  const Eigen::Isometry3d T_target_source = random_pose(rng, 0.1, 0.05);
+  const PointCloud source = transformed(room_cloud(0.2, 4), T_target_source.inverse());
+  for (IcpMethod method : {IcpMethod::kPointToPlane, IcpMethod::kPointToPoint}) {
+    IcpSettings s;
+    s.method = method;
+    s.keep_correspondences = true;
+    s.min_overlap = 0.5;
+    const IcpResult r = align_icp(source, target, Eigen::Isometry3d::Identity(), s);
+    ASSERT_NE(r.status, Status::kInsufficientData);
+    ASSERT_EQ(r.correspondences.size(), r.num_inliers);
+    Vector3d centroid = Vector3d::Zero();
+    for (const IcpCorrespondence& c : r.correspondences) centroid += c.x;
+    centroid /= static_cast<double>(r.correspondences.size());
+    EXPECT_LT((r.normal_matrix_pivot - centroid).norm(), 1e-9);
+    const Vector3d m = r.normal_matrix_pivot;
+    Matrix6d H = Matrix6d::Zero();
+    const double h = 1e-6;
+    for (const IcpCorrespondence& c : r.correspondences) {
+      auto residual = [&](const Vector6d& d) -> Vector3d {
+        const Vector3d x = c.x + d.head<3>().cross(c.x - m) + d.tail<3>();
+        if (method == IcpMethod::kPointToPlane) return Vector3d(c.n.dot(x - c.q), 0.0, 0.0);
+        return x - c.q;
+      };
+      Eigen::Matrix<double, 3, 6> J;
+      for (int k = 0; k < 6; ++k) {
+        const Vector6d e = Vector6d::Unit(k) * h;
+        J.col(k) = (residual(e) - residual(-e)) / (2.0 * h);
+      }
+      H += J.transpose() * J;
+    }
+    EXPECT_LT((r.normal_matrix - H).norm(), 1e-6 * H.norm()) << static_cast<int>(method);
+    const Eigen::SelfAdjointEigenSolver<Matrix6d> es(H / static_cast<double>(r.num_inliers));
+    EXPECT_NEAR(r.degeneracy, es.eigenvalues()(0), 1e-9);
+  }
+  PointCloud plane;
+  for (int i = 0; i < 30; ++i)
+    for (int j = 0; j < 30; ++j) plane.points.emplace_back(0.1f * i, 0.1f * j, 0.0f);
+  plane.normals.assign(plane.points.size(), Vector3f(0, 0, 1));
+  IcpSettings s;
+  s.method = IcpMethod::kPointToPlane;
+  s.min_overlap = 0.0;
+  const IcpResult r = align_icp(plane, plane, Eigen::Isometry3d::Identity(), s);
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> es(r.normal_matrix);
+  EXPECT_LT(es.eigenvalues()(2), 1e-9 * es.eigenvalues()(5));  // x, y and yaw unconstrained
+  EXPECT_GT(es.eigenvalues()(3), 1e-3 * es.eigenvalues()(5));
+}
+
 TEST(IcpTest, BadInput) {
   const PointCloud room = room_cloud(0.2, 1);
   const KdTree3f tree(room);

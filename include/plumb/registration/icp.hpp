@@ -73,10 +73,19 @@ struct IcpResult {
   double overlap = 0.0;          ///< overlap ratio at the final estimate (beta = overlap_distance), [0, 1]
   double rmse = 0.0;             ///< RMS residual of those correspondences (metric of `method`) [m]
   double final_correspondence_distance = 0.0;  ///< d of the last round [m]
-  /// Degeneracy indicator: smallest eigenvalue of the 6x6 normal matrix J^T J / num_inliers at
-  /// the final correspondences (rotation about their centroid, then translation). Near 0 means
-  /// a direction the geometry does not constrain (corridor, single plane).
+  /// Degeneracy indicator: smallest eigenvalue of normal_matrix / num_inliers. Near 0 means a
+  /// direction the geometry does not constrain (corridor, single plane).
   double degeneracy = 0.0;
+  /// The 6x6 normal matrix J^T J of `method`'s residuals (point-to-plane: one per pair,
+  /// n.(x - q); point-to-point: three, x - q) summed over the num_inliers final correspondences,
+  /// J taken with respect to a small motion of the aligned source (rotation w, then translation
+  /// v: x -> x + w x (x - normal_matrix_pivot) + v) in the target frame. Unweighted by the robust
+  /// kernel and unscaled by the noise: times 1 / sigma^2 it is the information of the estimate
+  /// for range noise sigma. Zero when there are no final correspondences.
+  Matrix6d normal_matrix = Matrix6d::Zero();
+  /// Centre of the rotation in normal_matrix: the centroid of the aligned source points of the
+  /// final correspondences (target frame) [m].
+  Vector3d normal_matrix_pivot = Vector3d::Zero();
   /// The num_inliers pairs at the final estimate, when settings.keep_correspondences (else empty).
   std::vector<IcpCorrespondence> correspondences;
 };
