@@ -14,11 +14,11 @@
 #include <vector>
 
 #include "bench_data.hpp"
+#include "plumb/bim/bim_cloud.hpp"
 #include "plumb/bim/ifc.hpp"
 #include "plumb/bim/mesh.hpp"
 #include "plumb/core/rng.hpp"
 #include "plumb/pipeline/bim_localizer.hpp"
-#include "plumb/pipeline/run.hpp"
 #include "plumb/registration/localize.hpp"
 #include "plumb/sim/lidar.hpp"
 #include "plumb/sim/scenario.hpp"
@@ -49,7 +49,7 @@ const Data& data() {
     } catch (const std::exception&) {
       return out;
     }
-    out.bim_cloud = plumb::sample_bim_cloud(*out.mesh, 0.05);
+    out.bim_cloud = plumb::bim::sample_bim_cloud(*out.mesh, 0.05);
     plumb::sim::ScenarioSettings s = plumb::sim::scenario_defaults(plumb::sim::ScenarioKind::kIndoor);
     s.seed = 11;
     const plumb::sim::ScenarioPlan plan = plumb::sim::plan_scenario(*out.mesh, s);

@@ -22,11 +22,12 @@
 #include <unistd.h>
 
 #include "bench_data.hpp"
+#include "plumb/bim/bim_cloud.hpp"
 #include "plumb/bim/ifc.hpp"
 #include "plumb/bim/mesh.hpp"
+#include "plumb/core/deskew.hpp"
 #include "plumb/io/frame_dump.hpp"
 #include "plumb/pipeline/bim_odometry.hpp"
-#include "plumb/pipeline/run.hpp"
 #include "plumb/sim/scenario.hpp"
 
 namespace {
@@ -64,7 +65,7 @@ const IndoorRun& fzk_indoor() {
     run->odom.push_back(odom.at(dump.stamp(i)));
   }
   run->T0 = dump.ground_truth().poses.front();
-  run->bim_cloud = std::make_shared<PointCloud>(sample_bim_cloud(mesh, 0.05));
+  run->bim_cloud = std::make_shared<PointCloud>(bim::sample_bim_cloud(mesh, 0.05));
   std::filesystem::remove_all(dir);
   return *run;
 }

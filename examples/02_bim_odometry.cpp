@@ -13,7 +13,17 @@
 #include <exception>
 #include <memory>
 
-#include <plumb/plumb.hpp>
+// What a robot's loop needs: the model (bim), deskewing (core) and the odometry (pipeline); io only
+// because the frames come from a dump here.
+#include <plumb/bim/bim_cloud.hpp>
+#include <plumb/bim/ifc.hpp>
+#include <plumb/bim/mesh.hpp>
+#include <plumb/core/deskew.hpp>
+#include <plumb/core/status.hpp>
+#include <plumb/io/frame_dump.hpp>
+#include <plumb/pipeline/bim_localizer.hpp>
+#include <plumb/pipeline/bim_odometry.hpp>
+#include <plumb/pipeline/pose_composer.hpp>
 
 namespace {
 
@@ -30,7 +40,7 @@ int main(int argc, char** argv) {
   try {
     // 1. The building.
     const bim::BimMesh mesh = bim::build_mesh(bim::read_ifc(argv[1]), bim::mesh_settings_with_spaces());
-    const auto bim_cloud = std::make_shared<const PointCloud>(sample_bim_cloud(mesh, 0.05));
+    const auto bim_cloud = std::make_shared<const PointCloud>(bim::sample_bim_cloud(mesh, 0.05));
     const io::FrameDumpReader dump(argv[2]);
     const Eigen::Isometry3d T_base_lidar = dump.meta().T_base_lidar;
     const OdometryInterpolator odom(dump.odometry());  // wheel odometry at any time

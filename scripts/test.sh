@@ -41,7 +41,7 @@ rm -rf build/ci/prefix build/package
 cmake --install build/ci >/dev/null
 cmake -S tests/package -B build/package -DCMAKE_PREFIX_PATH="$root/build/ci/prefix" >/dev/null
 cmake --build build/package -j"$jobs"
-for component in plumb core io bim sim pipeline; do
+for component in plumb core io bim sim pipeline app; do
   consumer=build/package/plumb_consumer
   [ "$component" = plumb ] || consumer="build/package/plumb_${component}_consumer"
   "$consumer"

@@ -8,7 +8,7 @@
 // frame). A frame failing after others were processed still writes the set ("partial": true, exit 1).
 // Exit code 3 (kExitJobFailed) when no frame after the first was registered (LOAM or ICP): the set is
 // written, but the trajectory is the motion prediction alone. The run itself is the library's
-// run_lio() (pipeline/lio_run.hpp); this file turns options into its settings and its report into files.
+// run_lio() (app/lio_run.hpp); this file turns options into its settings and its report into files.
 
 #include <cstdio>
 #include <fstream>
@@ -23,10 +23,10 @@
 #include "cli_support.hpp"
 #include "registry.hpp"
 #include "run_output.hpp"
+#include "plumb/app/lio_run.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/io/frame_dump.hpp"
 #include "plumb/io/trajectory.hpp"
-#include "plumb/pipeline/lio_run.hpp"
 
 namespace plumb::cli {
 namespace {

@@ -9,9 +9,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "plumb/app/run.hpp"
 #include "plumb/bim/mesh.hpp"
 #include "plumb/io/frame_dump.hpp"
-#include "plumb/pipeline/run.hpp"
 
 namespace plumb::cli {
 

@@ -8,6 +8,7 @@
 #include "plumb/version.hpp"
 
 #include "plumb/core/clock.hpp"
+#include "plumb/core/deskew.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/core/laser_scan.hpp"
 #include "plumb/core/lie.hpp"
@@ -81,6 +82,7 @@
 #include "plumb/optim/imu_factor.hpp"
 #include "plumb/optim/least_squares.hpp"
 
+#include "plumb/bim/bim_cloud.hpp"
 #include "plumb/bim/demo_building.hpp"
 #include "plumb/bim/floor_plan.hpp"
 #include "plumb/bim/ifc.hpp"
@@ -103,6 +105,7 @@
 #include "plumb/pipeline/bim_localizer.hpp"
 #include "plumb/pipeline/bim_odometry.hpp"
 #include "plumb/pipeline/hybrid_lio.hpp"
-#include "plumb/pipeline/lio_run.hpp"
 #include "plumb/pipeline/pose_composer.hpp"
-#include "plumb/pipeline/run.hpp"
+
+#include "plumb/app/lio_run.hpp"
+#include "plumb/app/run.hpp"

@@ -17,12 +17,12 @@
 
 #include <gtest/gtest.h>
 
+#include "plumb/bim/bim_cloud.hpp"
 #include "plumb/bim/floor_plan.hpp"
 #include "plumb/bim/ifc.hpp"
 #include "plumb/bim/mesh.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/core/rng.hpp"
-#include "plumb/pipeline/run.hpp"
 #include "plumb/sim/lidar.hpp"
 #include "plumb/sim/scenario.hpp"
 #include "model_variants.hpp"
@@ -61,7 +61,7 @@ const Building& building(const std::string& name, bool exact = false) {
   if (it != cache.end()) return it->second;
   Building b;
   b.mesh = std::make_unique<plumb::bim::BimMesh>(plumb::bim::build_mesh(plumb::bim::read_ifc(model_path(name))));
-  b.localizer = std::make_unique<BimLocalizer>(*b.mesh, plumb::sample_bim_cloud(*b.mesh, 0.05));
+  b.localizer = std::make_unique<BimLocalizer>(*b.mesh, plumb::bim::sample_bim_cloud(*b.mesh, 0.05));
   plumb::sim::ScenarioSettings s = plumb::sim::scenario_defaults(plumb::sim::ScenarioKind::kIndoor);
   s.seed = 11;
   if (exact) {
@@ -182,7 +182,7 @@ TEST(BimLocalizerTest, AModelWithoutFloorsLocalizesTheStartsOfTheFullBuilding) {
   PLUMB_REQUIRE_DATA(path, "ifc/buildings/AC20-FZK-Haus.ifc");
   const Building& b = building("AC20-FZK-Haus");
   const plumb::bim::BimMesh bare = plumb::test::without_types(*b.mesh, {"IfcSlab", "IfcCovering"});
-  const BimLocalizer localizer(bare, plumb::sample_bim_cloud(bare, 0.05));
+  const BimLocalizer localizer(bare, plumb::bim::sample_bim_cloud(bare, 0.05));
   const Tally t = localize_all("AC20-FZK-Haus without floors", b, localizer, 0.0, 0.0);
   EXPECT_GE(t.found, t.scaled(17));
   if (t.found > 0) {
@@ -203,7 +203,7 @@ TEST(BimLocalizerTest, AModelWithRoomsButNoFloorsLocalizesTheStartsOfTheFullBuil
       plumb::bim::build_mesh(plumb::bim::read_ifc(path), plumb::bim::mesh_settings_with_spaces());
   const plumb::bim::BimMesh bare = plumb::test::without_types(with_rooms, {"IfcSlab", "IfcCovering"});
   ASSERT_EQ(plumb::bim::floor_plan(bare).floor_source, plumb::bim::FloorSource::kSpaces);
-  const BimLocalizer localizer(bare, plumb::sample_bim_cloud(bare, 0.05));
+  const BimLocalizer localizer(bare, plumb::bim::sample_bim_cloud(bare, 0.05));
   const Tally t = localize_all("AC20-FZK-Haus with rooms, without floors", b, localizer, 0.0, 0.0);
   EXPECT_GE(t.found, t.scaled(17));
   if (t.found > 0) {
@@ -277,7 +277,7 @@ TEST(BimLocalizerTest, WeakHintedMatchIsRefinedAgainAlongTheWeakDirection) {
   const Building& b = building("duplex");
   plumb::BimLocalizerSettings no_retry = b.localizer->settings();
   no_retry.retry_shift = 0.0;
-  const BimLocalizer plain(*b.mesh, plumb::sample_bim_cloud(*b.mesh, 0.05), no_retry);
+  const BimLocalizer plain(*b.mesh, plumb::bim::sample_bim_cloud(*b.mesh, 0.05), no_retry);
   for (const std::size_t k : {std::size_t{2}, std::size_t{9}}) {
     const Start& st = b.starts[k];
     const Eigen::Vector2d truth = st.T_world_base.translation().head<2>();
@@ -343,21 +343,21 @@ TEST(BimLocalizerTest, BadInputGivesStatusOrClearError) {
   EXPECT_THROW(loc.localize(office.starts[0].frame, bad), plumb::Error);
   EXPECT_THROW(loc.localize(office.starts[0].frame, office.T_base_lidar, Eigen::Vector2d(0, 0), -1.0), plumb::Error);
   // A BIM cloud without normals, bad settings: plumb::Error.
-  plumb::PointCloud no_normals = plumb::sample_bim_cloud(*office.mesh, 0.2);
+  plumb::PointCloud no_normals = plumb::bim::sample_bim_cloud(*office.mesh, 0.2);
   no_normals.normals.clear();
   EXPECT_THROW(BimLocalizer(*office.mesh, no_normals), plumb::Error);
   plumb::BimLocalizerSettings s;
   s.slice_min = 2.0;
   s.slice_max = 1.0;
-  EXPECT_THROW(BimLocalizer(*office.mesh, plumb::sample_bim_cloud(*office.mesh, 0.2), s), plumb::Error);
+  EXPECT_THROW(BimLocalizer(*office.mesh, plumb::bim::sample_bim_cloud(*office.mesh, 0.2), s), plumb::Error);
   plumb::BimLocalizerSettings weak;
   weak.min_score_when_ambiguous = 1.5;
-  EXPECT_THROW(BimLocalizer(*office.mesh, plumb::sample_bim_cloud(*office.mesh, 0.2), weak), plumb::Error);
+  EXPECT_THROW(BimLocalizer(*office.mesh, plumb::bim::sample_bim_cloud(*office.mesh, 0.2), weak), plumb::Error);
   plumb::BimLocalizerSettings retry;
   retry.retry_shift = -0.25;
-  EXPECT_THROW(BimLocalizer(*office.mesh, plumb::sample_bim_cloud(*office.mesh, 0.2), retry), plumb::Error);
+  EXPECT_THROW(BimLocalizer(*office.mesh, plumb::bim::sample_bim_cloud(*office.mesh, 0.2), retry), plumb::Error);
   retry.retry_shift = std::nan("");
-  EXPECT_THROW(BimLocalizer(*office.mesh, plumb::sample_bim_cloud(*office.mesh, 0.2), retry), plumb::Error);
+  EXPECT_THROW(BimLocalizer(*office.mesh, plumb::bim::sample_bim_cloud(*office.mesh, 0.2), retry), plumb::Error);
 }
 
 }  // namespace

@@ -95,27 +95,6 @@ struct RunReport {
   double registration_error_rms = 0.0, registration_error_max = 0.0;  ///< [m]
 };
 
-/// @brief Wheel-odometry pose at any time, linearly interpolated in SE(2) between recorded samples
-///        (clamped to the first / last one): the prior and the deskewing motion of each frame.
-class OdometryInterpolator {
- public:
-  /// @throws plumb::Error when there is no sample or the stamps do not increase
-  explicit OdometryInterpolator(std::vector<OdomSample> samples);
-  Pose2 at(double t) const;
-  double first_stamp() const { return s_.front().stamp; }
-  double last_stamp() const { return s_.back().stamp; }
-
- private:
-  std::vector<OdomSample> s_;
-};
-
-/// @brief The BIM cloud a LiDAR is registered to: the model's surfaces sampled every `spacing`
-///        metres with their face normals, skipping what a LiDAR does not see in the building
-///        (doors are open, windows transmit, spaces and opening volumes are not surfaces, and
-///        furnishing is not the structure).
-/// @throws plumb::Error when spacing is not positive
-PointCloud sample_bim_cloud(const bim::BimMesh& mesh, double spacing);
-
 /// @brief A frame dump's ground truth (gt.tum) for the frames a driver processes.
 struct FrameGroundTruth {
   Trajectory poses;             ///< gt.tum as read, pose i at frame i's stamp (empty without gt.tum)
@@ -135,11 +114,5 @@ FrameGroundTruth read_frame_ground_truth(const io::FrameDumpReader& dump, std::s
 ///         and the first frame stamp it misses), a model without geometry, or a failure before any
 ///         frame result (a later failure gives a partial report, see RunReport::partial)
 RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& mesh, const RunSettings& settings = {});
-
-/// @brief Undo the motion distortion of a frame: each point, measured at stamp + time_i in the LiDAR
-///        frame of that instant, is moved into the LiDAR frame at `stamp` using T_ref_base(t), the base
-///        pose at absolute time t in any fixed frame. Points without a time are left as they are.
-void deskew_frame(PointCloud& frame, double stamp, const Eigen::Isometry3d& T_base_lidar,
-                  const std::function<Eigen::Isometry3d(double)>& T_ref_base);
 
 }  // namespace plumb

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "plumb/pipeline/lio_run.hpp"
+#include "plumb/app/lio_run.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,10 +7,10 @@
 #include <string>
 #include <vector>
 
+#include "plumb/app/run.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/core/types.hpp"
 #include "plumb/eval/metrics.hpp"
-#include "plumb/pipeline/run.hpp"
 
 namespace plumb {
 namespace {

@@ -3,7 +3,7 @@
 // (which frames start the map, counts, ground truth present, short or absent, partial runs, bad
 // dumps), and on a short simulated site run around FZK-Haus its figures against the ground truth
 // and against what `plumb lio` writes for the same dump.
-#include "plumb/pipeline/lio_run.hpp"
+#include "plumb/app/lio_run.hpp"
 
 #include <unistd.h>
 

@@ -1,20 +1,18 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "plumb/pipeline/run.hpp"
+#include "plumb/app/run.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cctype>
-#include <limits>
 #include <memory>
 #include <optional>
-#include <set>
 #include <string>
 #include <utility>
 #include <vector>
 
-#include "plumb/bim/sample.hpp"
+#include "plumb/bim/bim_cloud.hpp"
 #include "plumb/core/clock.hpp"
+#include "plumb/core/deskew.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/core/sensor_data.hpp"
 #include "plumb/eval/metrics.hpp"
@@ -29,61 +27,6 @@ double horizontal_error(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) 
 }
 
 }  // namespace
-
-OdometryInterpolator::OdometryInterpolator(std::vector<OdomSample> samples) : s_(std::move(samples)) {
-  PLUMB_CHECK(!s_.empty(), "OdometryInterpolator: no odometry sample (odom.csv is empty)");
-  for (std::size_t i = 1; i < s_.size(); ++i) {
-    PLUMB_CHECK(s_[i].stamp > s_[i - 1].stamp, "OdometryInterpolator: stamps must increase (sample " << i << ")");
-  }
-}
-
-Pose2 OdometryInterpolator::at(double t) const {
-  if (t <= s_.front().stamp) return s_.front().pose;
-  if (t >= s_.back().stamp) return s_.back().pose;
-  const auto it = std::lower_bound(s_.begin(), s_.end(), t, [](const OdomSample& a, double v) { return a.stamp < v; });
-  const OdomSample& b = *it;
-  const OdomSample& a = *(it - 1);
-  return interpolate_pose2(a.pose, b.pose, (t - a.stamp) / (b.stamp - a.stamp));
-}
-
-void deskew_frame(PointCloud& frame, double stamp, const Eigen::Isometry3d& T_base_lidar,
-                  const std::function<Eigen::Isometry3d(double)>& T_ref_base) {
-  if (!frame.has_times()) return;
-  PLUMB_CHECK(frame.times.size() == frame.points.size(), "deskew_frame: " << frame.times.size() << " times for "
-                                                                          << frame.points.size() << " points");
-  const Eigen::Isometry3d T_lidar_base = T_base_lidar.inverse();
-  const Eigen::Isometry3d T_base0_ref = T_ref_base(stamp).inverse();
-  // Points of one sweep share a few hundred distinct firing times: cache the last transform.
-  float last_time = std::numeric_limits<float>::quiet_NaN();
-  Eigen::Matrix3f R = Eigen::Matrix3f::Identity();
-  Eigen::Vector3f t = Eigen::Vector3f::Zero();
-  for (std::size_t i = 0; i < frame.points.size(); ++i) {
-    const float ti = frame.times[i];
-    if (!std::isfinite(ti)) continue;
-    if (ti != last_time) {
-      const Eigen::Isometry3d T = T_lidar_base * T_base0_ref * T_ref_base(stamp + ti) * T_base_lidar;
-      R = T.linear().cast<float>();
-      t = T.translation().cast<float>();
-      last_time = ti;
-    }
-    frame.points[i] = R * frame.points[i] + t;
-  }
-}
-
-PointCloud sample_bim_cloud(const bim::BimMesh& mesh, double spacing) {
-  static const std::set<std::string> kInvisible = {"IFCDOOR", "IFCWINDOW", "IFCSPACE", "IFCOPENINGELEMENT",
-                                                   "IFCFURNISHINGELEMENT", "IFCFURNITURE"};
-  bim::SurfaceSampleSettings ss;
-  ss.spacing = spacing;
-  std::set<std::string> types;
-  for (const bim::BimElement& e : mesh.elements) {
-    std::string upper = e.type;
-    std::transform(upper.begin(), upper.end(), upper.begin(), [](unsigned char c) { return std::toupper(c); });
-    if (!kInvisible.count(upper) && e.num_triangles > 0) types.insert(e.type);
-  }
-  ss.filter.types.assign(types.begin(), types.end());
-  return bim::sample_surface(mesh, ss);
-}
 
 FrameGroundTruth read_frame_ground_truth(const io::FrameDumpReader& dump, std::size_t frames) {
   FrameGroundTruth gt;
@@ -282,7 +225,7 @@ RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& 
   PLUMB_CHECK(mesh.num_triangles() > 0, "run_bim_odometry: the model has no geometry");
   RunReport report;
   const OdometryInterpolator odom(dump.odometry());
-  auto bim_cloud = std::make_shared<const PointCloud>(sample_bim_cloud(mesh, settings.bim_spacing));
+  auto bim_cloud = std::make_shared<const PointCloud>(bim::sample_bim_cloud(mesh, settings.bim_spacing));
   report.bim_points = bim_cloud->size();
   const std::size_t n = settings.max_frames > 0 ? std::min(settings.max_frames, dump.num_frames()) : dump.num_frames();
   report.frames_requested = n;
