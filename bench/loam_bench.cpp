@@ -136,7 +136,7 @@ void BM_LioFrame(benchmark::State& state, LioMode mode, bool every_frame_icp) {
   const SiteRun& run = site16();
   HybridLioSettings s = run.settings;
   s.mode = mode;
-  if (every_frame_icp) s.min_plane_points = std::numeric_limits<std::size_t>::max();
+  if (every_frame_icp) s.features.min_plane_points = std::numeric_limits<std::size_t>::max();
   std::unique_ptr<HybridLio> lio;
   auto restart = [&] {
     lio = std::make_unique<HybridLio>(run.T0, s);

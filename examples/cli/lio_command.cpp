@@ -41,7 +41,7 @@ struct LioOptions {
   std::size_t min_plane_points = 48;
   bool no_deskew = false;
   int map_window = 0;
-  std::string icp_metric = to_string(HybridLioSettings{}.icp_metric);
+  std::string icp_metric = to_string(HybridLioSettings{}.solver.icp_metric);
   bool icp_only = false;
 };
 
@@ -58,8 +58,8 @@ nlohmann::json lio_report_json(const LioRunReport& r, const LioOptions& o, const
   j["warnings"] = r.warnings;
   j["ground_truth"] = r.ground_truth_note;
   j["map_window"] = o.map_window;
-  j["icp_metric"] = to_string(s.icp_metric);
-  j["icp_keep_loam"] = s.icp_keep_loam;
+  j["icp_metric"] = to_string(s.solver.icp_metric);
+  j["icp_keep_loam"] = s.solver.icp_keep_loam;
   j["frames_per_mode"] = {{"init", r.frames_in(LioFrameMode::kInit)},
                           {"loam", r.frames_in(LioFrameMode::kLoam)},
                           {"icp", r.frames_in(LioFrameMode::kIcp)},
@@ -103,13 +103,13 @@ void run(const LioOptions& o) {
   LioRunSettings settings;
   HybridLioSettings& s = settings.lio;
   s.mode = mode;
-  s.min_plane_points = o.min_plane_points;
+  s.features.min_plane_points = o.min_plane_points;
   // A handful of points would start a map nothing can be matched to: wait for a real sweep.
-  s.min_init_points = 100;
-  s.deskew = !o.no_deskew;
-  s.icp_metric = icp_metric_from_string(o.icp_metric);
-  if (o.icp_only) s.icp_keep_loam = false;
-  s.edge_map.max_age = s.plane_map.max_age = s.point_map.max_age = static_cast<std::size_t>(o.map_window);
+  s.features.min_init_points = 100;
+  s.motion.deskew = !o.no_deskew;
+  s.solver.icp_metric = icp_metric_from_string(o.icp_metric);
+  if (o.icp_only) s.solver.icp_keep_loam = false;
+  s.map.edge_map.max_age = s.map.plane_map.max_age = s.map.point_map.max_age = static_cast<std::size_t>(o.map_window);
   settings.max_frames = o.max_frames;
   const LioRunReport r = run_lio(dump, settings);
   print_warnings(r.warnings);

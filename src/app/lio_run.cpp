@@ -34,8 +34,8 @@ LioInput prepare(const io::FrameDumpReader& dump, const LioRunSettings& settings
   in.lio.T_base_imu = dump.meta().T_base_imu;
   const std::vector<double>& elevations = dump.meta().lidar.elevations_rad;
   if (!elevations.empty()) {
-    in.lio.image.vertical_angles_deg.clear();
-    for (double e : elevations) in.lio.image.vertical_angles_deg.push_back(e * 180.0 / kPi);
+    in.lio.features.image.vertical_angles_deg.clear();
+    for (double e : elevations) in.lio.features.image.vertical_angles_deg.push_back(e * 180.0 / kPi);
   }
   const std::size_t n = settings.max_frames > 0 ? std::min(settings.max_frames, dump.num_frames()) : dump.num_frames();
   report.frames_requested = n;
@@ -98,7 +98,8 @@ void track_frames(const io::FrameDumpReader& dump, const LioInput& in, const Lio
     report.frames.push_back(r);
     if (settings.progress) settings.progress(i + 1, n);
   }
-  PLUMB_CHECK(first_frame < n, dump.dir() << ": none of the " << n << " frames has the " << in.lio.min_init_points
+  PLUMB_CHECK(first_frame < n, dump.dir() << ": none of the " << n << " frames has the "
+                                          << in.lio.features.min_init_points
                                           << " points needed to start the map (are the frame files empty?)");
   report.first_frame = first_frame;
   report.imu_samples_dropped += lio->num_imu_dropped();

@@ -72,40 +72,47 @@ const char* to_string(LioFrameMode mode) {
 }
 
 HybridLio::HybridLio(const Eigen::Isometry3d& T_world_base0, const HybridLioSettings& s)
-    : settings_(s), edge_map_(s.edge_map), plane_map_(s.plane_map), point_map_(s.point_map) {
+    : settings_(s), edge_map_(s.map.edge_map), plane_map_(s.map.plane_map), point_map_(s.map.point_map) {
   PLUMB_CHECK(T_world_base0.matrix().allFinite(), "HybridLio: the initial pose is not finite");
   PLUMB_CHECK(s.T_base_lidar.matrix().allFinite() && s.T_base_imu.matrix().allFinite(),
               "HybridLio: settings.T_base_lidar / T_base_imu are not finite");
-  PLUMB_CHECK(s.max_iterations >= 1, "HybridLio: settings.max_iterations must be >= 1, got " << s.max_iterations);
-  PLUMB_CHECK(s.max_correspondence_distance > 0.0 && std::isfinite(s.max_correspondence_distance),
-              "HybridLio: settings.max_correspondence_distance must be > 0");
-  PLUMB_CHECK(s.map_neighbors >= 3 && s.map_neighbors <= 64,
-              "HybridLio: settings.map_neighbors must be in [3, 64], got " << s.map_neighbors);
-  PLUMB_CHECK(std::isfinite(s.map_plane_tolerance) && s.map_plane_tolerance > 0.0,
-              "HybridLio: settings.map_plane_tolerance must be > 0 [m], got " << s.map_plane_tolerance);
-  PLUMB_CHECK(s.map_edge_ratio >= 1.0 && s.map_plane_ratio >= 1.0,
-              "HybridLio: settings.map_edge_ratio / map_plane_ratio must be >= 1 (eigenvalue ratios)");
-  PLUMB_CHECK(s.plane_sigma > 0.0 && s.edge_sigma > 0.0 && s.point_sigma > 0.0 && s.huber_scale > 0.0,
-              "HybridLio: settings.plane_sigma / edge_sigma / point_sigma / huber_scale must be > 0");
-  PLUMB_CHECK(s.icp_neighbors >= 3 && s.icp_neighbors <= 64,
-              "HybridLio: settings.icp_neighbors must be in [3, 64], got " << s.icp_neighbors);
-  PLUMB_CHECK(s.min_correspondences >= 6, "HybridLio: settings.min_correspondences must be >= 6");
-  PLUMB_CHECK(s.icp_voxel_size > 0.0 && s.plane_query_voxel > 0.0 && s.ground_query_voxel > 0.0,
-              "HybridLio: settings.icp_voxel_size / plane_query_voxel / ground_query_voxel must be > 0");
-  PLUMB_CHECK(s.gravity > 0.0 && std::isfinite(s.gravity), "HybridLio: settings.gravity must be > 0");
-  PLUMB_CHECK(s.max_imu_gap > 0.0, "HybridLio: settings.max_imu_gap must be > 0");
-  PLUMB_CHECK(s.twist_frames >= 1, "HybridLio: settings.twist_frames must be >= 1");
-  PLUMB_CHECK(s.map_rebuild_distance >= 0.0 && s.map_rebuild_frames >= 1,
-              "HybridLio: settings.map_rebuild_distance must be >= 0 and map_rebuild_frames >= 1");
-  PLUMB_CHECK(s.initial_velocity_sigma > 0.0 && s.initial_gyro_bias_sigma > 0.0 && s.initial_accel_bias_sigma > 0.0,
-              "HybridLio: settings.initial_*_sigma must be > 0");
-  PLUMB_CHECK(std::isfinite(s.ground_plane_tolerance) && s.ground_plane_tolerance >= 0.0,
-              "HybridLio: settings.ground_plane_tolerance must be >= 0 [m], got " << s.ground_plane_tolerance);
-  PLUMB_CHECK(s.ground_max_slope_deg >= 0.0 && s.ground_max_slope_deg < 90.0,
-              "HybridLio: settings.ground_max_slope_deg must be in [0, 90)");
-  check_map_settings(s.edge_map, "edge_map");
-  check_map_settings(s.plane_map, "plane_map");
-  check_map_settings(s.point_map, "point_map");
+  const LioSolverSettings& so = s.solver;
+  PLUMB_CHECK(so.max_iterations >= 1,
+              "HybridLio: settings.solver.max_iterations must be >= 1, got " << so.max_iterations);
+  PLUMB_CHECK(so.max_correspondence_distance > 0.0 && std::isfinite(so.max_correspondence_distance),
+              "HybridLio: settings.solver.max_correspondence_distance must be > 0");
+  PLUMB_CHECK(so.map_neighbors >= 3 && so.map_neighbors <= 64,
+              "HybridLio: settings.solver.map_neighbors must be in [3, 64], got " << so.map_neighbors);
+  PLUMB_CHECK(std::isfinite(so.map_plane_tolerance) && so.map_plane_tolerance > 0.0,
+              "HybridLio: settings.solver.map_plane_tolerance must be > 0 [m], got " << so.map_plane_tolerance);
+  PLUMB_CHECK(so.map_edge_ratio >= 1.0 && so.map_plane_ratio >= 1.0,
+              "HybridLio: settings.solver.map_edge_ratio / map_plane_ratio must be >= 1 (eigenvalue ratios)");
+  PLUMB_CHECK(so.plane_sigma > 0.0 && so.edge_sigma > 0.0 && so.point_sigma > 0.0 && so.huber_scale > 0.0,
+              "HybridLio: settings.solver.plane_sigma / edge_sigma / point_sigma / huber_scale must be > 0");
+  PLUMB_CHECK(so.icp_neighbors >= 3 && so.icp_neighbors <= 64,
+              "HybridLio: settings.solver.icp_neighbors must be in [3, 64], got " << so.icp_neighbors);
+  PLUMB_CHECK(so.min_correspondences >= 6, "HybridLio: settings.solver.min_correspondences must be >= 6");
+  const LioMapSettings& m = s.map;
+  PLUMB_CHECK(m.icp_voxel_size > 0.0 && m.plane_query_voxel > 0.0 && m.ground_query_voxel > 0.0,
+              "HybridLio: settings.map.icp_voxel_size / plane_query_voxel / ground_query_voxel must be > 0");
+  PLUMB_CHECK(m.map_rebuild_distance >= 0.0 && m.map_rebuild_frames >= 1,
+              "HybridLio: settings.map.map_rebuild_distance must be >= 0 and map_rebuild_frames >= 1");
+  const LioImuSettings& imu = s.imu;
+  PLUMB_CHECK(imu.gravity > 0.0 && std::isfinite(imu.gravity), "HybridLio: settings.imu.gravity must be > 0");
+  PLUMB_CHECK(imu.max_imu_gap > 0.0, "HybridLio: settings.imu.max_imu_gap must be > 0");
+  PLUMB_CHECK(imu.initial_velocity_sigma > 0.0 && imu.initial_gyro_bias_sigma > 0.0 &&
+                  imu.initial_accel_bias_sigma > 0.0,
+              "HybridLio: settings.imu.initial_*_sigma must be > 0");
+  PLUMB_CHECK(s.motion.twist_frames >= 1, "HybridLio: settings.motion.twist_frames must be >= 1");
+  const LioFeatureSettings& fe = s.features;
+  PLUMB_CHECK(std::isfinite(fe.ground_plane_tolerance) && fe.ground_plane_tolerance >= 0.0,
+              "HybridLio: settings.features.ground_plane_tolerance must be >= 0 [m], got "
+                  << fe.ground_plane_tolerance);
+  PLUMB_CHECK(fe.ground_max_slope_deg >= 0.0 && fe.ground_max_slope_deg < 90.0,
+              "HybridLio: settings.features.ground_max_slope_deg must be in [0, 90)");
+  check_map_settings(m.edge_map, "map.edge_map");
+  check_map_settings(m.plane_map, "map.plane_map");
+  check_map_settings(m.point_map, "map.point_map");
   T_imu_lidar_ = s.T_base_imu.inverse() * s.T_base_lidar;
   const Eigen::Isometry3d T_world_imu = T_world_base0 * s.T_base_imu;
   state_.R_world_body = T_world_imu.linear();
@@ -116,8 +123,8 @@ HybridLio::HybridLio(const Eigen::Isometry3d& T_world_base0, const HybridLioSett
 void HybridLio::reset_prior() {
   const HybridLioSettings& s = settings_;
   Vector15d sigma;
-  sigma << Vector3d::Constant(1e-3), Vector3d::Constant(1e-2), Vector3d::Constant(s.initial_velocity_sigma),
-      Vector3d::Constant(s.initial_gyro_bias_sigma), Vector3d::Constant(s.initial_accel_bias_sigma);
+  sigma << Vector3d::Constant(1e-3), Vector3d::Constant(1e-2), Vector3d::Constant(s.imu.initial_velocity_sigma),
+      Vector3d::Constant(s.imu.initial_gyro_bias_sigma), Vector3d::Constant(s.imu.initial_accel_bias_sigma);
   prior_information_ = sigma.cwiseInverse().cwiseAbs2().asDiagonal();
 }
 
@@ -139,26 +146,26 @@ bool HybridLio::imu_covers(double t0, double t1) const {
   auto it = std::upper_bound(imu_.begin(), imu_.end(), t0, [](double t, const ImuSample& s) { return t < s.stamp; });
   std::size_t a = static_cast<std::size_t>(it - imu_.begin());
   if (a == 0) {
-    if (imu_.front().stamp - t0 > settings_.max_imu_gap) return false;
+    if (imu_.front().stamp - t0 > settings_.imu.max_imu_gap) return false;
   } else {
     --a;
-    if (t0 - imu_[a].stamp > settings_.max_imu_gap) return false;
+    if (t0 - imu_[a].stamp > settings_.imu.max_imu_gap) return false;
   }
   for (std::size_t k = a; k + 1 < imu_.size() && imu_[k].stamp < t1; ++k) {
-    if (imu_[k + 1].stamp - imu_[k].stamp > settings_.max_imu_gap) return false;
+    if (imu_[k + 1].stamp - imu_[k].stamp > settings_.imu.max_imu_gap) return false;
   }
-  return t1 - imu_.back().stamp <= settings_.max_imu_gap;
+  return t1 - imu_.back().stamp <= settings_.imu.max_imu_gap;
 }
 
 void HybridLio::remember_pose(double stamp) {
   recent_poses_.emplace_back(stamp, pose_of(state_));
-  while (recent_poses_.size() > settings_.twist_frames + 1) recent_poses_.pop_front();
+  while (recent_poses_.size() > settings_.motion.twist_frames + 1) recent_poses_.pop_front();
   const auto& [t0, T0] = recent_poses_.front();
   twist_ = recent_poses_.size() < 2 ? Vector6d::Zero() : Vector6d(se3::log(T0.inverse() * pose_of(state_)) / (stamp - t0));
 }
 
 void HybridLio::deskew(PointCloud& cloud, double stamp, const ImuState& x, bool use_imu, LioFrameResult& res) const {
-  if (!settings_.deskew || !cloud.has_times()) return;
+  if (!settings_.motion.deskew || !cloud.has_times()) return;
   double t_max = 0.0;
   for (float t : cloud.times) {
     if (std::isfinite(t) && t > t_max) t_max = t;
@@ -170,7 +177,7 @@ void HybridLio::deskew(PointCloud& cloud, double stamp, const ImuState& x, bool 
   std::vector<Matrix3d> kR{Matrix3d::Identity()};
   std::vector<Vector3d> kp{Vector3d::Zero()};
   if (use_imu && imu_covers(stamp, stamp + t_max)) {
-    const Vector3d g(0.0, 0.0, -settings_.gravity);
+    const Vector3d g(0.0, 0.0, -settings_.imu.gravity);
     Matrix3d R = x.R_world_body;
     Vector3d p = x.p_world_body, v = x.v_world;
     const Matrix3d R0t = R.transpose();
@@ -290,11 +297,11 @@ namespace {
 
 LoamSettings map_association_settings(const HybridLioSettings& set) {
   LoamSettings ls;
-  ls.max_correspondence_distance = set.max_correspondence_distance;
-  ls.map_neighbors = set.map_neighbors;
-  ls.map_plane_tolerance = set.map_plane_tolerance;
-  ls.map_edge_ratio = set.map_edge_ratio;
-  ls.map_plane_ratio = set.map_plane_ratio;
+  ls.max_correspondence_distance = set.solver.max_correspondence_distance;
+  ls.map_neighbors = set.solver.map_neighbors;
+  ls.map_plane_tolerance = set.solver.map_plane_tolerance;
+  ls.map_edge_ratio = set.solver.map_edge_ratio;
+  ls.map_plane_ratio = set.solver.map_plane_ratio;
   return ls;
 }
 
@@ -321,7 +328,7 @@ LioFrameResult HybridLio::process(const PointCloud& frame_lidar, double stamp) {
   f.dt = initialized_ ? stamp - last_stamp_ : 0.0;
   predict(f);
   extract(f, frame_lidar);
-  if (!initialized_ && f.cloud.size() < settings_.min_init_points) {
+  if (!initialized_ && f.cloud.size() < settings_.features.min_init_points) {
     f.res.mode = LioFrameMode::kSkipped;
     f.res.status = Status::kInsufficientData;
     return finish(f);
@@ -352,9 +359,9 @@ LioFrameResult HybridLio::finish(Frame& f) const {
 void HybridLio::predict(Frame& f) const {
   const HybridLioSettings& set = settings_;
   PreintegrationSettings pis;
-  pis.noise = set.imu_noise;
-  pis.g_world = Vector3d(0.0, 0.0, -set.gravity);
-  pis.max_gap = set.max_imu_gap;
+  pis.noise = set.imu.noise;
+  pis.g_world = Vector3d(0.0, 0.0, -set.imu.gravity);
+  pis.max_gap = set.imu.max_imu_gap;
   f.pred = state_;
   if (initialized_) {
     if (set.mode != LioMode::kLoam) {
@@ -386,9 +393,9 @@ void HybridLio::extract(Frame& f, const PointCloud& frame_lidar) const {
   // azimuth moved into a neighbour's column. Building it from the frame as fired (LOAM's order)
   // keeps the rings whole, but made both simulated site runs drift more (hybrid mode, end error:
   // FZK-Haus 0.71 m against 0.009 m, duplex ~8 m against 3.7 m). The cause is open.
-  const RangeImage image = build_range_image(cloud, set.image);
+  const RangeImage image = build_range_image(cloud, set.features.image);
   LoamFeatures& feats = f.feats;
-  feats = extract_loam_features(cloud, image, set.features);
+  feats = extract_loam_features(cloud, image, set.features.loam);
   res.num_plane_points = feats.planes.size();
   res.num_edge_points = feats.edges.size();
   res.num_plane_interval = feats.num_plane_interval;
@@ -396,8 +403,8 @@ void HybridLio::extract(Frame& f, const PointCloud& frame_lidar) const {
 
   // Ground (LeGO-LOAM's pair test, completed by a plane): the road.
   RingGroundSettings gs;
-  gs.max_slope_deg = set.ground_max_slope_deg;
-  gs.plane_tolerance = set.ground_plane_tolerance;
+  gs.max_slope_deg = set.features.ground_max_slope_deg;
+  gs.plane_tolerance = set.features.ground_plane_tolerance;
   const RingGroundResult ground_result = classify_ground(cloud, image, f.pred.R_world_body * T_imu_lidar_.linear(), gs);
   const std::vector<char>& ground = ground_result.ground;
   res.num_ground = ground_result.num_ground;
@@ -424,16 +431,16 @@ void HybridLio::extract(Frame& f, const PointCloud& frame_lidar) const {
   // ICP queries, off the ground only: nearest-point pairs on the rings of a flat road pull the
   // frame back onto the last one (the rings barely move with the sensor); height, roll and pitch
   // come from the IMU and the previous state.
-  f.icp_points.points = voxel_downsample(off, set.icp_voxel_size);
+  f.icp_points.points = voxel_downsample(off, set.map.icp_voxel_size);
   // Scan-to-map plane queries (LOAM's mapping step matches every "less flat" point, not only the
   // few selected per sector, which on an open site are nearly all on the road): the structure
   // off the ground on a fine grid, the ground on a coarse one (it only fixes height, roll, pitch).
   // The map association keeps only neighbourhoods that fit a plane.
   // Ground queries on their own as well: ICP frames match them point-to-plane against the plane
   // map (LeGO-LOAM's ground step: height, roll and pitch from the road in every mode).
-  f.ground_feats.planes.points = voxel_downsample(on, set.ground_query_voxel);
-  if (set.dense_plane_queries) {
-    feats.planes.points = voxel_downsample(off, set.plane_query_voxel);
+  f.ground_feats.planes.points = voxel_downsample(on, set.map.ground_query_voxel);
+  if (set.map.dense_plane_queries) {
+    feats.planes.points = voxel_downsample(off, set.map.plane_query_voxel);
     const std::vector<Vector3f>& g = f.ground_feats.planes.points;
     feats.planes.points.insert(feats.planes.points.end(), g.begin(), g.end());
     feats.plane_candidates.points.clear();
@@ -445,13 +452,13 @@ std::size_t HybridLio::associate(const Frame& f, LioFrameMode m, const ImuState&
                                  std::vector<LoamCorrespondence>& corr) {
   const HybridLioSettings& set = settings_;
   auto stale = [&](const Vector3d& at, std::size_t frame) {
-    return (f.here - at).norm() > set.map_rebuild_distance ||
-           num_frames_ - frame >= static_cast<std::size_t>(set.map_rebuild_frames);
+    return (f.here - at).norm() > set.map.map_rebuild_distance ||
+           num_frames_ - frame >= static_cast<std::size_t>(set.map.map_rebuild_frames);
   };
   corr.clear();
   const LoamSettings ls = map_association_settings(set);
   const Eigen::Isometry3d T_world_lidar = pose_of(x) * T_imu_lidar_;
-  const bool loam_in_icp = set.icp_keep_loam || set.icp_ground_planes;
+  const bool loam_in_icp = set.solver.icp_keep_loam || set.solver.icp_ground_planes;
   if (m == LioFrameMode::kLoam || loam_in_icp) {
     if (!loam_tree_ || stale(loam_built_at_, loam_built_frame_)) {
       PointCloud e, p;
@@ -474,19 +481,20 @@ std::size_t HybridLio::associate(const Frame& f, LioFrameMode m, const ImuState&
     point_built_frame_ = num_frames_;
   }
   std::size_t matched = 0;
-  if (set.icp_metric == IcpMetric::kPointToDistribution) {
+  if (set.solver.icp_metric == IcpMetric::kPointToDistribution) {
     // An ICP pair to a distribution is three correspondences.
     matched = lio_detail::associate_distributions(point_cloud_, *point_tree_, f.icp_points, T_world_lidar, set, corr);
   } else {
-    loam_associate_points(point_cloud_, *point_tree_, f.icp_points, T_world_lidar, set.max_correspondence_distance,
+    loam_associate_points(point_cloud_, *point_tree_, f.icp_points, T_world_lidar,
+                          set.solver.max_correspondence_distance,
                           corr);
     matched = corr.size();
   }
   // Too few ICP pairs is what makes the frame fall back to the prediction; ground planes alone
   // do not count (they fix neither x, y nor yaw).
-  if (loam_in_icp && matched >= set.min_correspondences) {
+  if (loam_in_icp && matched >= set.solver.min_correspondences) {
     const std::size_t before = corr.size();
-    loam_associate_map(*loam_tree_, set.icp_keep_loam ? f.feats : f.ground_feats, T_world_lidar, ls, corr);
+    loam_associate_map(*loam_tree_, set.solver.icp_keep_loam ? f.feats : f.ground_feats, T_world_lidar, ls, corr);
     matched += corr.size() - before;
   }
   return matched;
@@ -495,26 +503,26 @@ std::size_t HybridLio::associate(const Frame& f, LioFrameMode m, const ImuState&
 void HybridLio::associate_round(Frame& f, int iteration) {
   const HybridLioSettings& set = settings_;
   std::size_t matched = associate(f, f.lidar_mode, f.xj, f.corr);
-  if (iteration == 0 && set.mode == LioMode::kHybrid && set.switch_on_plane_matches) {
+  if (iteration == 0 && set.mode == LioMode::kHybrid && set.features.switch_on_plane_matches) {
     // The switch on what LOAM would use: plane residuals whose map plane is not flat (walls,
     // roofs, not the road), the ones that fix x, y and yaw.
-    const double cos_flat = std::cos(set.ground_max_slope_deg * kPi / 180.0);
+    const double cos_flat = std::cos(set.features.ground_max_slope_deg * kPi / 180.0);
     for (const LoamCorrespondence& c : f.corr) {
       if (c.kind == LoamCorrespondence::Kind::kPlane && std::abs(c.dir.z()) < cos_flat) ++f.res.num_structure_matches;
     }
-    if (f.res.num_structure_matches < set.min_plane_points) {
+    if (f.res.num_structure_matches < set.features.min_plane_points) {
       f.tried_icp = true;
       f.lidar_mode = LioFrameMode::kIcp;
       matched = associate(f, f.lidar_mode, f.xj, f.corr);
     }
   }
-  if (matched < set.min_correspondences) {
+  if (matched < set.solver.min_correspondences) {
     if (set.mode == LioMode::kHybrid && !f.tried_icp) {  // hybrid: LOAM found too little, try ICP
       f.tried_icp = true;
       f.lidar_mode = LioFrameMode::kIcp;
       matched = associate(f, f.lidar_mode, f.xj, f.corr);
     }
-    if (matched < set.min_correspondences) {
+    if (matched < set.solver.min_correspondences) {
       f.lidar_ok = false;
       f.corr.clear();
       matched = 0;
@@ -529,7 +537,8 @@ void HybridLio::solve(Frame& f) {
   const HybridLioSettings& set = settings_;
   // The hybrid switch (Zhou et al. 2021, sec. 3.2).
   f.lidar_mode = LioFrameMode::kLoam;
-  if (set.mode == LioMode::kHybrid && !set.switch_on_plane_matches && f.res.num_structure_planes < set.min_plane_points) {
+  if (set.mode == LioMode::kHybrid && !set.features.switch_on_plane_matches &&
+      f.res.num_structure_planes < set.features.min_plane_points) {
     f.lidar_mode = LioFrameMode::kIcp;
   }
   f.tried_icp = f.lidar_mode == LioFrameMode::kIcp;
@@ -542,7 +551,7 @@ void HybridLio::solve(Frame& f) {
   Matrix30d H;
   Vector30d g;
   double sum_sq = 0.0;
-  for (int it = 0; it < set.max_iterations; ++it) {
+  for (int it = 0; it < set.solver.max_iterations; ++it) {
     if (f.lidar_ok) {
       associate_round(f, it);
       if (!f.lidar_ok && !problem.with_imu()) break;
@@ -570,7 +579,8 @@ void HybridLio::solve(Frame& f) {
       }
     }
     const Vector6d dj = delta.segment<6>(problem.offset_j());
-    if (!accepted || (dj.head<3>().norm() < set.min_step_rotation && dj.tail<3>().norm() < set.min_step_translation)) {
+    if (!accepted ||
+        (dj.head<3>().norm() < set.solver.min_step_rotation && dj.tail<3>().norm() < set.solver.min_step_translation)) {
       f.converged = true;
       break;
     }

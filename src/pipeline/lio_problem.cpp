@@ -26,7 +26,7 @@ double lidar_terms(const std::vector<LoamCorrespondence>& corr, const std::vecto
   const Vector3d& p = x.p_world_body;
   double cost = 0.0;
   // Huber on the squared whitened norm; HybridLio checks the scale (> 0, and +inf is plain least squares).
-  const RobustLoss huber{RobustKernel::kHuber, set.huber_scale};
+  const RobustLoss huber{RobustKernel::kHuber, set.solver.huber_scale};
   Eigen::Matrix<double, 3, 6> Jq;
   for (std::size_t k = 0; k < corr.size(); ++k) {
     const LoamCorrespondence& c = corr[k];
@@ -36,7 +36,7 @@ double lidar_terms(const std::vector<LoamCorrespondence>& corr, const std::vecto
       Jq.rightCols<3>().setIdentity();
     }
     if (c.kind == LoamCorrespondence::Kind::kPlane) {
-      const double inv = c.weight / set.plane_sigma;
+      const double inv = c.weight / set.solver.plane_sigma;
       const double d = c.dir.dot(q - c.a);
       const double r = inv * d;
       const double s = r * r;
@@ -50,7 +50,7 @@ double lidar_terms(const std::vector<LoamCorrespondence>& corr, const std::vecto
       }
     } else {
       const bool edge = c.kind == LoamCorrespondence::Kind::kEdge;
-      const double inv = c.weight / (edge ? set.edge_sigma : set.point_sigma);
+      const double inv = c.weight / (edge ? set.solver.edge_sigma : set.solver.point_sigma);
       const Vector3d d = edge ? Vector3d(c.dir.cross(q - c.a)) : Vector3d(q - c.a);
       const Vector3d r = inv * d;
       const double s = r.squaredNorm();
@@ -70,13 +70,14 @@ double lidar_terms(const std::vector<LoamCorrespondence>& corr, const std::vecto
 std::size_t associate_distributions(const PointCloud& map, const KdTree3f& tree, const PointCloud& cur,
                                     const Eigen::Isometry3d& T_map_cur, const HybridLioSettings& set,
                                     std::vector<LoamCorrespondence>& corr) {
-  const std::size_t k = static_cast<std::size_t>(set.icp_neighbors);
+  const std::size_t k = static_cast<std::size_t>(set.solver.icp_neighbors);
   std::size_t idx[64];
   float d2[64];
-  const float max_sq = static_cast<float>(set.max_correspondence_distance * set.max_correspondence_distance);
+  const double max_d = set.solver.max_correspondence_distance;
+  const float max_sq = static_cast<float>(max_d * max_d);
   const Eigen::Matrix3f R = T_map_cur.linear().cast<float>();
   const Eigen::Vector3f t = T_map_cur.translation().cast<float>();
-  const double var0 = set.point_sigma * set.point_sigma;
+  const double var0 = set.solver.point_sigma * set.solver.point_sigma;
   std::size_t pairs = 0;
   for (const Vector3f& p : cur.points) {
     if (!p.allFinite()) continue;
@@ -90,7 +91,7 @@ std::size_t associate_distributions(const PointCloud& map, const KdTree3f& tree,
     for (int a = 0; a < 3; ++a) {
       const double lambda = std::max(eig.eigenvalues()(a), 0.0);
       corr.push_back({LoamCorrespondence::Kind::kPlane, p.cast<double>(), mean, eig.eigenvectors().col(a),
-                      set.plane_sigma / std::sqrt(lambda + var0)});
+                      set.solver.plane_sigma / std::sqrt(lambda + var0)});
     }
     ++pairs;
   }

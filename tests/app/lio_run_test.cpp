@@ -86,7 +86,7 @@ std::string write_dump(const std::string& name, const SyntheticDump& d) {
 LioRunSettings loam_settings() {
   LioRunSettings s;
   s.lio.mode = LioMode::kLoam;
-  s.lio.min_init_points = 100;
+  s.lio.features.min_init_points = 100;
   return s;
 }
 
@@ -226,7 +226,7 @@ TEST(LioRunTest, UnusableDumpsAreRefusedNamingTheProblem) {
   EXPECT_NE(message.find("imu.csv"), std::string::npos) << message;
   // No frame with the points to start the map.
   s = loam_settings();
-  s.lio.min_init_points = 1000;
+  s.lio.features.min_init_points = 1000;
   message = test::error_of([&] { run_lio(dump, s); });
   EXPECT_NE(message.find("none of the 8 frames has the 1000 points needed to start the map"), std::string::npos)
       << message;
@@ -257,7 +257,7 @@ TEST_F(LioRunSiteTest, HybridTracksTheTruthAndIsWhatTheCliWrites) {
   const Trajectory gt = dump.ground_truth();
   const std::size_t n = dump.num_frames();
   LioRunSettings s;
-  s.lio.min_init_points = 100;  // as `plumb lio`
+  s.lio.features.min_init_points = 100;  // as `plumb lio`
   const LioRunReport r = run_lio(dump, s);
   ASSERT_EQ(r.frames.size(), n);
   EXPECT_EQ(r.first_frame, 0u);

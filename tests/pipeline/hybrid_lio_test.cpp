@@ -153,12 +153,12 @@ TEST_F(HybridLioSiteTest, HybridSwitchFollowsThePlanePointCount) {
   // ground (30..50 per frame here, so both branches run).
   for (bool on_matches : {true, false}) {
     SCOPED_TRACE(on_matches ? "switch on plane matches" : "switch on plane features");
-    s.switch_on_plane_matches = on_matches;
+    s.features.switch_on_plane_matches = on_matches;
     const std::vector<LioFrameResult> r = run(s, n);
     std::size_t icp = 0, loam = 0;
     for (std::size_t i = 1; i < r.size(); ++i) {
       const std::size_t count = on_matches ? r[i].num_structure_matches : r[i].num_structure_planes;
-      const bool few = count < s.min_plane_points;
+      const bool few = count < s.features.min_plane_points;
       EXPECT_EQ(r[i].mode, few ? LioFrameMode::kIcp : LioFrameMode::kLoam) << "frame " << i;
       EXPECT_LE(r[i].num_structure_planes, r[i].num_plane_points);
       icp += r[i].mode == LioFrameMode::kIcp ? 1 : 0;
@@ -170,15 +170,15 @@ TEST_F(HybridLioSiteTest, HybridSwitchFollowsThePlanePointCount) {
       EXPECT_GT(loam, 0u);
     }
   }
-  s.switch_on_plane_matches = true;
+  s.features.switch_on_plane_matches = true;
   // A threshold above every frame's count: ICP throughout; 0: LOAM throughout.
-  s.min_plane_points = 100000;
+  s.features.min_plane_points = 100000;
   for (const LioFrameResult& f : run(s, 15)) {
     if (f.mode != LioFrameMode::kInit) {
       EXPECT_EQ(f.mode, LioFrameMode::kIcp);
     }
   }
-  s.min_plane_points = 0;
+  s.features.min_plane_points = 0;
   for (const LioFrameResult& f : run(s, 15)) {
     if (f.mode != LioFrameMode::kInit) {
       EXPECT_EQ(f.mode, LioFrameMode::kLoam);
@@ -186,7 +186,7 @@ TEST_F(HybridLioSiteTest, HybridSwitchFollowsThePlanePointCount) {
   }
   // loam-imu never switches, whatever the count.
   HybridLioSettings li = settings(LioMode::kLoamImu);
-  li.min_plane_points = 100000;
+  li.features.min_plane_points = 100000;
   for (const LioFrameResult& f : run(li, 15)) {
     if (f.mode != LioFrameMode::kInit) {
       EXPECT_EQ(f.mode, LioFrameMode::kLoam);
@@ -204,7 +204,7 @@ TEST_F(HybridLioSiteTest, GroundPlaneTakesTheRoadThePairTestMisses) {
   HybridLioSettings s = settings(LioMode::kLoamImu);
   const std::size_t n = 30;
   const std::vector<LioFrameResult> with_plane = run(s, n);
-  s.ground_plane_tolerance = 0.0;
+  s.features.ground_plane_tolerance = 0.0;
   const std::vector<LioFrameResult> pair_only = run(s, n);
   std::size_t road_total = 0, found_plane = 0, found_pair = 0;
   for (std::size_t i = 0; i < n; ++i) {
@@ -260,7 +260,7 @@ TEST_F(HybridLioSiteTest, ImuGapDeskewsWithTheMeanTwistOfRecentFrames) {
   const std::size_t n = std::min<std::size_t>(45, run_->frames.size());
   auto worst_in_gap = [&](std::size_t twist_frames, bool deskew_gap) {
     HybridLioSettings s = settings(LioMode::kHybrid);
-    s.twist_frames = twist_frames;
+    s.motion.twist_frames = twist_frames;
     HybridLio lio(run_->gt.poses.front(), s);
     std::size_t k = 0, gaps = 0;
     double worst = 0.0;
@@ -306,7 +306,7 @@ TEST_F(HybridLioSiteTest, LidarOnlyPredictsWithTheMeanTwistOfRecentFrames) {
   const Eigen::Isometry3d T_base_imu = run_->meta.T_base_imu;
   auto drift = [&](std::size_t twist_frames) {
     HybridLioSettings s = settings(LioMode::kLoam);
-    s.twist_frames = twist_frames;
+    s.motion.twist_frames = twist_frames;
     HybridLio lio(run_->gt.poses.front(), s);
     std::vector<Eigen::Isometry3d> imu_poses;
     double total = 0.0, before = 0.0;
@@ -413,7 +413,7 @@ TEST(HybridLioTest, LeavingTheHouseTheGroundPlaneKeepsFramesMoving) {
   auto end_error = [&](LioMode mode, double ground_plane_tolerance) {
     HybridLioSettings s;
     s.mode = mode;
-    s.ground_plane_tolerance = ground_plane_tolerance;
+    s.features.ground_plane_tolerance = ground_plane_tolerance;
     s.T_base_lidar = dump.meta().T_base_lidar;
     s.T_base_imu = dump.meta().T_base_imu;
     HybridLio lio(gt.poses.front(), s);
@@ -425,7 +425,7 @@ TEST(HybridLioTest, LeavingTheHouseTheGroundPlaneKeepsFramesMoving) {
     }
     return (r.T_world_base.translation() - gt.poses.back().translation()).norm();
   };
-  const double plane = HybridLioSettings{}.ground_plane_tolerance;
+  const double plane = HybridLioSettings{}.features.ground_plane_tolerance;
   const double loam = end_error(LioMode::kLoam, plane), loam_pairs = end_error(LioMode::kLoam, 0.0);
   const double hybrid = end_error(LioMode::kHybrid, plane);
   std::filesystem::remove_all(dir);
@@ -460,39 +460,39 @@ TEST(HybridLioTest, FramesWithoutFeaturesFallBackToPrediction) {
 
 TEST(HybridLioTest, BadSettingsAndNamesThrow) {
   HybridLioSettings s;
-  s.max_iterations = 0;
+  s.solver.max_iterations = 0;
   EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
   s = {};
-  s.map_neighbors = 2;
+  s.solver.map_neighbors = 2;
   EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
   s = {};
-  s.twist_frames = 0;
+  s.motion.twist_frames = 0;
   EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
   s = {};
-  s.map_plane_tolerance = 0.0;
+  s.solver.map_plane_tolerance = 0.0;
   EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
-  s.map_plane_tolerance = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
-  s = {};
-  s.map_plane_ratio = 0.5;
+  s.solver.map_plane_tolerance = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
   s = {};
-  s.plane_sigma = 0.0;
+  s.solver.map_plane_ratio = 0.5;
   EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
   s = {};
-  s.plane_map.voxel_size = -1.0;
+  s.solver.plane_sigma = 0.0;
   EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
   s = {};
-  s.icp_neighbors = 2;
-  EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
-  s.icp_neighbors = 65;
+  s.map.plane_map.voxel_size = -1.0;
   EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
   s = {};
-  s.ground_plane_tolerance = -0.1;
+  s.solver.icp_neighbors = 2;
   EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
-  s.ground_plane_tolerance = std::numeric_limits<double>::infinity();
+  s.solver.icp_neighbors = 65;
   EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
-  s.ground_plane_tolerance = 0.0;  // off is allowed
+  s = {};
+  s.features.ground_plane_tolerance = -0.1;
+  EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
+  s.features.ground_plane_tolerance = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(HybridLio(Eigen::Isometry3d::Identity(), s), Error);
+  s.features.ground_plane_tolerance = 0.0;  // off is allowed
   EXPECT_NO_THROW(HybridLio(Eigen::Isometry3d::Identity(), s));
   Eigen::Isometry3d bad = Eigen::Isometry3d::Identity();
   bad(0, 3) = std::numeric_limits<double>::infinity();

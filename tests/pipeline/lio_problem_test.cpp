@@ -63,10 +63,10 @@ void exact_correspondences(const ImuState& truth, std::mt19937& rng, std::vector
 
 HybridLioSettings problem_settings(double huber_scale) {
   HybridLioSettings s;
-  s.plane_sigma = 0.05;
-  s.edge_sigma = 0.08;
-  s.point_sigma = 0.1;
-  s.huber_scale = huber_scale;
+  s.solver.plane_sigma = 0.05;
+  s.solver.edge_sigma = 0.08;
+  s.solver.point_sigma = 0.1;
+  s.solver.huber_scale = huber_scale;
   return s;
 }
 

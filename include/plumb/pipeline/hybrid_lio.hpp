@@ -10,7 +10,7 @@
 ///        or ICP residuals against a local point map (E_L2).
 ///
 /// Two departures from the ICP frames of Zhou et al. 2021 (sec. 3.2), both settings (the paper's form:
-/// icp_metric = kPointToPoint, icp_keep_loam = false): the pairs are point-to-distribution, and the
+/// solver.icp_metric = kPointToPoint, solver.icp_keep_loam = false): the pairs are point-to-distribution, and the
 /// frame keeps the LOAM residuals the map still gives (the road, a few walls) beside them. On the
 /// simulated site runs without loop closure the paper's form drifted several times more than
 /// LOAM+IMU, these defaults less.
@@ -81,15 +81,10 @@ const char* to_string(IcpMetric metric);
 /// @brief Inverse of to_string(IcpMetric). @throws plumb::Error for another name.
 IcpMetric icp_metric_from_string(const std::string& name);
 
-/// @brief Settings of HybridLio. Defaults suit a 16-line LiDAR at 10 Hz and a MEMS IMU.
-struct HybridLioSettings {
-  LioMode mode = LioMode::kHybrid;  ///< estimator
-  Eigen::Isometry3d T_base_lidar = Eigen::Isometry3d::Identity();  ///< LiDAR points into the base frame
-  Eigen::Isometry3d T_base_imu = Eigen::Isometry3d::Identity();    ///< IMU frame into the base frame
-
-  // --- features and the hybrid switch (Zhou et al. 2021, sec. 3.2)
+/// @brief HybridLio's range image, features, ground and the hybrid switch (Zhou et al. 2021, sec. 3.2).
+struct LioFeatureSettings {
   RangeImageSettings image;       ///< range image of each (deskewed) frame
-  LoamFeatureSettings features;   ///< cosine features
+  LoamFeatureSettings loam;       ///< cosine features
   /// Hybrid switch: a frame with at least this many selected plane points off the ground uses
   /// LOAM residuals, fewer use ICP (Zhou et al. 2021, sec. 3.2: 48). Ground points (the road) constrain only
   /// height, roll and pitch, so they do not count as structure.
@@ -112,8 +107,11 @@ struct HybridLioSettings {
   /// stayed among the structure (ICP queries, edges) and, as ring arcs that barely move with the
   /// sensor, held frames back on the simulated site runs.
   double ground_plane_tolerance = 0.15;
+};
 
-  // --- solver (Zhou et al. 2021, eq. 21-22)
+/// @brief HybridLio's joint problem: association, residual noise, robust kernel, iterations
+/// (Zhou et al. 2021, eq. 21-22), and the ICP frames' residual.
+struct LioSolverSettings {
   int max_iterations = 8;                    ///< association + LM step rounds per frame, >= 1
   double max_correspondence_distance = 1.0;  ///< farther map neighbours are not used [m]
   /// Map points fitted per LOAM query, in [3, 64], and how close to the fitted plane they must all
@@ -136,7 +134,18 @@ struct HybridLioSettings {
   double min_step_translation = 1e-4;        ///< converged below this step [m] ...
   double min_step_rotation = 1e-5;           ///< ... and this rotation step [rad]
 
-  // --- local maps (bounded voxel hash maps, world frame)
+  IcpMetric icp_metric = IcpMetric::kPointToDistribution;  ///< ICP frames' residual (see IcpMetric)
+  int icp_neighbors = 8;  ///< map points per kPointToDistribution pair, in [3, 64]
+  /// ICP frames keep the LOAM residuals that the map gave too (E_B + E_L1 + E_L2); false: ICP
+  /// residuals only (E_B + E_L2, Zhou et al. 2021, eq. 21).
+  bool icp_keep_loam = true;
+  /// ICP frames also match their ground returns point-to-plane against the plane map (the ICP
+  /// pairs come from off the ground only, so without this height, roll and pitch rest on the IMU).
+  bool icp_ground_planes = false;
+};
+
+/// @brief HybridLio's local maps (bounded voxel hash maps, world frame) and the frame's queries.
+struct LioMapSettings {
   VoxelHashMapSettings edge_map{0.3, 1, 60.0, 100000};    ///< LOAM edge points
   VoxelHashMapSettings plane_map{0.4, 1, 60.0, 100000};   ///< LOAM plane points
   VoxelHashMapSettings point_map{0.4, 4, 60.0, 150000};   ///< ICP points
@@ -147,26 +156,24 @@ struct HybridLioSettings {
   bool dense_plane_queries = true;
   double plane_query_voxel = 0.3;   ///< see dense_plane_queries [m]
   double ground_query_voxel = 0.3;  ///< see dense_plane_queries; also the ICP frames' ground queries [m]
-  IcpMetric icp_metric = IcpMetric::kPointToDistribution;  ///< ICP frames' residual (see IcpMetric)
-  int icp_neighbors = 8;  ///< map points per kPointToDistribution pair, in [3, 64]
-  /// ICP frames keep the LOAM residuals that the map gave too (E_B + E_L1 + E_L2); false: ICP
-  /// residuals only (E_B + E_L2, Zhou et al. 2021, eq. 21).
-  bool icp_keep_loam = true;
-  /// ICP frames also match their ground returns point-to-plane against the plane map (the ICP
-  /// pairs come from off the ground only, so without this height, roll and pitch rest on the IMU).
-  bool icp_ground_planes = false;
   /// The maps' kd-trees are rebuilt (with every point added since) once the sensor has moved this
   /// far from where they were last built [m], or after map_rebuild_frames frames.
   double map_rebuild_distance = 1.0;
   int map_rebuild_frames = 10;  ///< see map_rebuild_distance, >= 1
+};
 
-  // --- IMU
-  ImuNoise imu_noise;           ///< noise model of the IMU factor (MEMS defaults)
+/// @brief HybridLio's IMU factor and the initial state's prior.
+struct LioImuSettings {
+  ImuNoise noise;               ///< noise model of the IMU factor (MEMS defaults)
   double gravity = 9.81;        ///< |g| [m/s^2] (the simulator's value; standard gravity is 9.80665)
   double max_imu_gap = 0.05;    ///< longer without an IMU sample: the IMU is not used for the frame [s]
   double initial_velocity_sigma = 0.2;     ///< prior std of the initial velocity (0 expected) [m/s]
   double initial_gyro_bias_sigma = 0.005;  ///< prior std of the initial gyro bias [rad/s]
   double initial_accel_bias_sigma = 0.1;   ///< prior std of the initial accelerometer bias [m/s^2]
+};
+
+/// @brief HybridLio's motion model without the IMU and the deskew.
+struct LioMotionSettings {
   /// Undo motion distortion in the IMU modes: with the IMU, or with constant velocity over an IMU
   /// gap. kLoam never deskews (LeGO-LOAM deskews only with an IMU; a constant-velocity deskew feeds
   /// the frame's own error back into the next frame: measured on the site runs, it oscillates from
@@ -181,6 +188,19 @@ struct HybridLioSettings {
   /// five intervals than with one; median 43 m against 109 m on FZK-Haus, 76 m against 291 m on
   /// duplex). >= 1.
   std::size_t twist_frames = 5;
+};
+
+/// @brief Settings of HybridLio, grouped by stage. Defaults suit a 16-line LiDAR at 10 Hz and a
+/// MEMS IMU.
+struct HybridLioSettings {
+  LioMode mode = LioMode::kHybrid;  ///< estimator
+  Eigen::Isometry3d T_base_lidar = Eigen::Isometry3d::Identity();  ///< LiDAR points into the base frame
+  Eigen::Isometry3d T_base_imu = Eigen::Isometry3d::Identity();    ///< IMU frame into the base frame
+  LioFeatureSettings features;  ///< range image, features, ground, the hybrid switch
+  LioSolverSettings solver;     ///< association, residuals, iterations
+  LioMapSettings map;           ///< local maps
+  LioImuSettings imu;           ///< IMU factor and initial prior
+  LioMotionSettings motion;     ///< constant-velocity model and deskew
 };
 
 /// @brief What HybridLio::process() did with one frame.
@@ -202,7 +222,7 @@ struct LioFrameResult {
   std::size_t num_ground = 0;            ///< returns taken as ground (the road)
   std::size_t num_ground_added = 0;      ///< ... of which the ground plane found, not the pair test
   std::size_t num_structure_planes = 0;  ///< plane features off the ground (the switch's count when
-                                         ///< settings.switch_on_plane_matches is false)
+                                         ///< settings.features.switch_on_plane_matches is false)
   std::size_t num_structure_matches = 0; ///< hybrid: non-flat plane residuals at the first association
                                          ///< (the switch's count when switch_on_plane_matches)
   std::size_t num_edge_points = 0;       ///< edge features selected
