@@ -20,6 +20,7 @@
 #include <unistd.h>
 
 #include "bench_data.hpp"
+#include "plumb/app/simulate.hpp"
 #include "plumb/bim/ifc.hpp"
 #include "plumb/bim/mesh.hpp"
 #include "plumb/io/frame_dump.hpp"
@@ -116,7 +117,7 @@ const SiteRun& site16() {
   sim::ScenarioSettings s = sim::scenario_defaults(sim::ScenarioKind::kSite);
   s.length = 12.0;
   s.seed = 2;
-  sim::simulate_scenario(bim::build_mesh(bim::read_ifc(bench::data_path("ifc/buildings/AC20-FZK-Haus.ifc"))), dir, s);
+  simulate_to_dump(bim::build_mesh(bim::read_ifc(bench::data_path("ifc/buildings/AC20-FZK-Haus.ifc"))), dir, s);
   const io::FrameDumpReader dump(dir);
   for (std::size_t i = 0; i < dump.num_frames(); ++i) {
     run->frames.push_back(dump.frame(i));

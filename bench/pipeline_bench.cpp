@@ -22,6 +22,7 @@
 #include <unistd.h>
 
 #include "bench_data.hpp"
+#include "plumb/app/simulate.hpp"
 #include "plumb/bim/bim_cloud.hpp"
 #include "plumb/bim/ifc.hpp"
 #include "plumb/bim/mesh.hpp"
@@ -53,7 +54,7 @@ const IndoorRun& fzk_indoor() {
   sim::ScenarioSettings s = sim::scenario_defaults(sim::ScenarioKind::kIndoor);
   s.length = 12.0;
   s.seed = 1;
-  sim::simulate_scenario(mesh, dir, s);
+  simulate_to_dump(mesh, dir, s);
   const io::FrameDumpReader dump(dir);
   const OdometryInterpolator odom(dump.odometry());
   run->T_base_lidar = dump.meta().T_base_lidar;

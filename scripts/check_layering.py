@@ -50,7 +50,6 @@ IO_USERS = {"app"}
 
 # (module, included module) -> why the include is there today.
 KNOWN_EXCEPTIONS = {
-    ("sim", "io"): "sim/scenario writes the frame dump it simulates; sim/lidar_model checks its input file",
 }
 
 MAX_LINES = 700

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <string>
 
+#include "plumb/app/simulate.hpp"
 #include "plumb/bim/ifc.hpp"
 #include "plumb/bim/mesh.hpp"
 #include "plumb/sim/scenario.hpp"
@@ -29,7 +30,7 @@ inline void simulate_fzk_site_run(const std::string& name, std::string& dir) {
   sim::ScenarioSettings s = sim::scenario_defaults(sim::ScenarioKind::kSite);
   s.length = 3.0;
   s.seed = 4;
-  sim::simulate_scenario(bim::build_mesh(bim::read_ifc(ifc)), dir, s);
+  simulate_to_dump(bim::build_mesh(bim::read_ifc(ifc)), dir, s);
 }
 
 }  // namespace plumb::test

@@ -22,6 +22,7 @@
 #include "cli_support.hpp"
 #include "registry.hpp"
 #include "run_output.hpp"
+#include "plumb/app/simulate.hpp"
 #include "plumb/bim/demo_building.hpp"
 #include "plumb/bim/ifc.hpp"
 #include "plumb/core/clock.hpp"
@@ -70,10 +71,11 @@ void run_demo(const DemoCommandOptions& o) {
   s.loops = o.loops;
   s.length = o.length;
   s.num_threads = threads;
-  s.dump.overwrite = false;  // the staging directory is new
-  s.model_name = "demo_office.ifc";
-  if (!o.json) s.progress = terminal_progress("simulate");
-  const sim::ScenarioResult sr = sim::simulate_scenario(mesh, dump_dir, s);
+  SimulateDumpSettings ds;
+  ds.dump.overwrite = false;  // the staging directory is new
+  ds.model_name = "demo_office.ifc";
+  if (!o.json) ds.progress = terminal_progress("simulate");
+  const sim::ScenarioResult sr = simulate_to_dump(mesh, dump_dir, s, ds);
   char line[256];
   std::snprintf(line, sizeof(line), "simulated %zu %s frames, %.1f m driven in %.1f s of robot time -> %s",
                 sr.num_frames, s.lidar.name.c_str(), sr.path_length, sr.duration, dump_out.dir().c_str());

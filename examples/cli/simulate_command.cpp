@@ -21,11 +21,11 @@
 #include "cli_support.hpp"
 #include "registry.hpp"
 #include "run_output.hpp"
+#include "plumb/app/simulate.hpp"
 #include "plumb/bim/ifc.hpp"
 #include "plumb/bim/mesh.hpp"
 #include "plumb/bim/sample.hpp"
 #include "plumb/core/error.hpp"
-#include "plumb/sim/lidar_model_json.hpp"
 #include "plumb/sim/scenario.hpp"
 
 namespace plumb::cli {
@@ -57,7 +57,7 @@ void run_simulate(const SimulateOptions& o) {
   sim::ScenarioSettings s = sim::scenario_defaults(kind);
   if (!o.lidar.empty()) {
     const bool is_file = o.lidar.size() > 5 && o.lidar.substr(o.lidar.size() - 5) == ".json";
-    s.lidar = is_file ? sim::read_lidar_model(o.lidar) : sim::lidar_preset(o.lidar);
+    s.lidar = is_file ? read_lidar_model(o.lidar) : sim::lidar_preset(o.lidar);
   }
   if (!o.imu.empty()) {
     const double rate = s.imu.rate_hz;
@@ -71,12 +71,13 @@ void run_simulate(const SimulateOptions& o) {
   s.world.as_built_sigma_m = o.as_built_sigma;
   s.world.as_built_sigma_rad = o.as_built_deg * M_PI / 180.0;
   s.num_threads = o.threads;
-  s.dump.overwrite = false;  // the staging directory is new
-  if (o.compressed) s.dump.encoding = io::PcdEncoding::kBinaryCompressed;
-  s.model_name = o.model_path.substr(o.model_path.find_last_of('/') + 1);
+  SimulateDumpSettings ds;
+  ds.dump.overwrite = false;  // the staging directory is new
+  if (o.compressed) ds.dump.encoding = io::PcdEncoding::kBinaryCompressed;
+  ds.model_name = o.model_path.substr(o.model_path.find_last_of('/') + 1);
   const bool progress_bar = isatty(fileno(stderr)) != 0;
   if (progress_bar) {
-    s.progress = [](std::size_t done, std::size_t total) {
+    ds.progress = [](std::size_t done, std::size_t total) {
       const int width = 40;
       const int filled = total > 0 ? static_cast<int>(width * done / total) : width;
       std::fprintf(stderr, "\r[%s%s] %zu/%zu frames", std::string(static_cast<std::size_t>(filled), '#').c_str(),
@@ -89,7 +90,7 @@ void run_simulate(const SimulateOptions& o) {
   OutputDir out(o.output_dir, "simulate", frame_dump_names(), o.overwrite, false);
   const bim::BimMesh mesh = bim::build_mesh(bim::read_ifc(o.model_path), bim::mesh_settings_with_spaces());
   s.storey = o.storey.empty() ? -1 : bim::find_storey(mesh, o.storey);
-  const sim::ScenarioResult r = sim::simulate_scenario(mesh, out.staging(), s);
+  const sim::ScenarioResult r = simulate_to_dump(mesh, out.staging(), s, ds);
   out.commit();
   if (o.json) {
     nlohmann::json j = {{"scenario", o.scenario},

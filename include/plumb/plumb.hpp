@@ -109,3 +109,4 @@
 
 #include "plumb/app/lio_run.hpp"
 #include "plumb/app/run.hpp"
+#include "plumb/app/simulate.hpp"

@@ -6,13 +6,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <fstream>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
 
 #include "plumb/core/error.hpp"
-#include "plumb/io/input_file.hpp"
 #include "plumb/sim/lidar.hpp"
 
 namespace plumb::sim {
@@ -145,14 +143,6 @@ LidarModel parse_lidar_model(const std::string& text, const std::string& name) {
     PLUMB_THROW(name << ": " << e.what());
   }
   return m;
-}
-
-LidarModel read_lidar_model(const std::string& path) {
-  std::ifstream in = io::open_input_file(path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  PLUMB_CHECK(!in.bad(), path << ": read error");
-  return parse_lidar_model(text.str(), path);
 }
 
 }  // namespace plumb::sim

@@ -203,43 +203,25 @@ ScenarioPlan plan_scenario(const bim::BimMesh& mesh, const ScenarioSettings& s) 
   return plan;
 }
 
-ScenarioResult simulate_scenario(const bim::BimMesh& mesh, const std::string& out_dir, const ScenarioSettings& s) {
+ScenarioRecording simulate_scenario(const bim::BimMesh& mesh, const ScenarioSettings& s,
+                                    const ScenarioFrameSink& on_frame) {
   const auto start = std::chrono::steady_clock::now();
   const ScenarioPlan plan = plan_scenario(mesh, s);
-  ScenarioResult r = simulate_scenario(plan, out_dir, s);
-  r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ScenarioRecording r = simulate_scenario(plan, s, on_frame);
+  r.summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
 }
 
-ScenarioResult simulate_scenario(const ScenarioPlan& plan, const std::string& out_dir, const ScenarioSettings& s) {
+ScenarioRecording simulate_scenario(const ScenarioPlan& plan, const ScenarioSettings& s,
+                                    const ScenarioFrameSink& on_frame) {
   const auto start = std::chrono::steady_clock::now();
   check_settings(s);
   PLUMB_CHECK(plan.world != nullptr && !plan.trajectory.states.empty(), "simulate_scenario: empty plan");
-  io::FrameDumpMeta meta;
-  meta.lidar.name = s.lidar.name;
-  meta.lidar.rate_hz = s.lidar.rate_hz;
-  meta.lidar.columns = s.lidar.columns;
-  meta.lidar.elevations_rad = s.lidar.elevations_rad;
-  meta.lidar.min_range = s.lidar.min_range;
-  meta.lidar.max_range = s.lidar.max_range;
-  meta.T_base_lidar = s.T_base_lidar;
-  meta.T_base_imu = s.T_base_imu;
-  meta.wheel_radius_left = s.wheels.radius;
-  meta.wheel_radius_right = s.wheels.radius;
-  meta.axle = s.wheels.axle;
-  meta.imu_rate_hz = s.imu.rate_hz;
-  meta.origin_offset = plan.mesh->origin_offset;
-  meta.source = "plumb simulate (seed " + std::to_string(s.seed) + ")";
-  meta.model = s.model_name;
-  meta.scenario = to_string(s.kind);
-  io::FrameDumpWriter writer(out_dir, meta, s.dump);
-
   const RobotTrajectory& traj = plan.trajectory;
   const Eigen::Isometry3d T_base_lidar = s.T_base_lidar;
   auto T_world_lidar = [&traj, &T_base_lidar](double t) { return traj.T_world_base(t) * T_base_lidar; };
   const std::size_t total = plan.frame_stamps.size();
-  ScenarioResult r;
-  Trajectory gt;
+  ScenarioRecording r;
   const std::size_t batch = static_cast<std::size_t>(s.num_threads);
   std::vector<PointCloud> clouds(batch);
   for (std::size_t first = 0; first < total; first += batch) {
@@ -267,33 +249,27 @@ ScenarioResult simulate_scenario(const ScenarioPlan& plan, const std::string& ou
     }
     for (std::size_t j = 0; j < count; ++j) {
       const double stamp = plan.frame_stamps[first + j];
-      writer.add_frame(stamp, clouds[j]);
-      r.num_points += clouds[j].size();
-      gt.push_back(stamp, traj.T_world_base(stamp));
-      if (s.progress) s.progress(first + j + 1, total);
+      if (on_frame) on_frame(first + j, stamp, clouds[j]);
+      r.summary.num_points += clouds[j].size();
+      r.ground_truth.push_back(stamp, traj.T_world_base(stamp));
     }
   }
-  writer.close();
 
   WheelSettings wheel_settings = s.wheels;
   wheel_settings.seed = mix(s.seed, 1);
-  const std::vector<WheelEncoderReading> wheels = simulate_wheels(traj, wheel_settings);
-  writer.write_wheels(wheels);
-  writer.write_odometry(integrate_wheel_odometry(wheels, s.wheels.radius, s.wheels.radius, s.wheels.axle));
+  r.wheels = simulate_wheels(traj, wheel_settings);
+  r.odometry = integrate_wheel_odometry(r.wheels, s.wheels.radius, s.wheels.radius, s.wheels.axle);
   ImuSettings imu_settings = s.imu;
   imu_settings.seed = mix(s.seed, 2);
-  writer.write_imu(simulate_imu(traj, s.T_base_imu, imu_settings).samples);
-  if (!gt.empty()) writer.write_ground_truth(gt);
-  Trajectory dense;
-  for (const RobotState& st : traj.states) dense.push_back(st.t, traj.T_world_base(st.t));
-  writer.write_ground_truth_dense(dense);
+  r.imu = simulate_imu(traj, s.T_base_imu, imu_settings).samples;
+  for (const RobotState& st : traj.states) r.ground_truth_dense.push_back(st.t, traj.T_world_base(st.t));
 
-  r.num_frames = total;
-  r.path_length = traj.length();
-  r.duration = traj.end_time() - traj.start_time();
-  r.storey = plan.storey;
-  if (plan.storey >= 0) r.storey_name = plan.mesh->storeys[static_cast<std::size_t>(plan.storey)].name;
-  r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  r.summary.num_frames = total;
+  r.summary.path_length = traj.length();
+  r.summary.duration = traj.end_time() - traj.start_time();
+  r.summary.storey = plan.storey;
+  if (plan.storey >= 0) r.summary.storey_name = plan.mesh->storeys[static_cast<std::size_t>(plan.storey)].name;
+  r.summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
 }
 

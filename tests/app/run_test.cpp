@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include "plumb/app/simulate.hpp"
 #include "plumb/bim/ifc.hpp"
 #include "plumb/bim/mesh.hpp"
 #include "plumb/io/frame_dump.hpp"
@@ -32,7 +33,7 @@ class BimOdometryRunTest : public ::testing::Test {
     s.lidar = plumb::sim::lidar_preset("vlp16");
     s.length = 6.0;
     s.seed = 5;
-    plumb::sim::simulate_scenario(*mesh_, dir_, s);
+    plumb::simulate_to_dump(*mesh_, dir_, s);
   }
   static void TearDownTestSuite() {
     std::filesystem::remove_all(dir_);

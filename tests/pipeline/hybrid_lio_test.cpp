@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include "plumb/app/simulate.hpp"
 #include "plumb/bim/ifc.hpp"
 #include "plumb/bim/mesh.hpp"
 #include "plumb/core/error.hpp"
@@ -41,7 +42,7 @@ class HybridLioSiteTest : public ::testing::Test {
     sim::ScenarioSettings s = sim::scenario_defaults(sim::ScenarioKind::kSite);
     s.length = 10.0;  // 1 s standing, then 10 m along the house's south side
     s.seed = 3;
-    sim::simulate_scenario(bim::build_mesh(bim::read_ifc(ifc)), dir, s);
+    simulate_to_dump(bim::build_mesh(bim::read_ifc(ifc)), dir, s);
     const io::FrameDumpReader dump(dir);
     run_ = new SiteRun;
     for (std::size_t i = 0; i < dump.num_frames(); ++i) {
@@ -406,7 +407,7 @@ TEST(HybridLioTest, LeavingTheHouseTheGroundPlaneKeepsFramesMoving) {
   sim::ScenarioSettings ss = sim::scenario_defaults(sim::ScenarioKind::kSite);
   ss.length = 15.0;
   ss.seed = 1;
-  sim::simulate_scenario(bim::build_mesh(bim::read_ifc(ifc)), dir, ss);
+  simulate_to_dump(bim::build_mesh(bim::read_ifc(ifc)), dir, ss);
   const io::FrameDumpReader dump(dir);
   const Trajectory gt = dump.ground_truth();
   const std::vector<ImuSample> imu = dump.imu();

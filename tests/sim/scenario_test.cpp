@@ -3,33 +3,34 @@
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
-#include <iterator>
 
 #include <gtest/gtest.h>
 
 #include "plumb/bim/floor_plan.hpp"
 #include "plumb/bim/ifc.hpp"
 #include "plumb/core/error.hpp"
-#include "plumb/io/frame_dump.hpp"
 #include "model_variants.hpp"
 #include "test_data.hpp"
 
 namespace plumb::sim {
 namespace {
 
-namespace fs = std::filesystem;
+/// The frames a simulation hands out, kept (the tests' runs are short).
+struct Frames {
+  std::vector<double> stamps;
+  std::vector<PointCloud> clouds;
+  ScenarioFrameSink sink() {
+    return [this](std::size_t index, double stamp, const PointCloud& cloud) {
+      EXPECT_EQ(index, stamps.size());
+      stamps.push_back(stamp);
+      clouds.push_back(cloud);
+    };
+  }
+};
 
-std::string fresh_dir(const std::string& name) {
-  const std::string dir = test::temp_path("scenario_" + name);
-  fs::remove_all(dir);
-  return dir;
-}
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+bool same_cloud(const PointCloud& a, const PointCloud& b) {
+  return a.points == b.points && a.intensities == b.intensities && a.rings == b.rings && a.times == b.times &&
+         a.labels == b.labels;
 }
 
 /// A coarse 8-line LiDAR (720 rays per sweep) so the tests stay fast.
@@ -56,42 +57,38 @@ ScenarioSettings small_indoor(double length) {
   return s;
 }
 
-TEST(ScenarioTest, IndoorDumpIsConsistent) {
+TEST(ScenarioTest, IndoorSimulationIsConsistent) {
   PLUMB_REQUIRE_DATA(path, "ifc/buildings/AC20-FZK-Haus.ifc");
-  const std::string dir = fresh_dir("indoor");
   const ScenarioSettings s = small_indoor(4.0);
-  const ScenarioResult r = simulate_scenario(fzk_haus(), dir, s);
-  EXPECT_GT(r.num_frames, 40u);
-  EXPECT_NEAR(r.path_length, 4.0, 0.6);  // 4 m along the route; corners are cut
+  Frames frames;
+  const ScenarioRecording r = simulate_scenario(fzk_haus(), s, frames.sink());
+  EXPECT_GT(r.summary.num_frames, 40u);
+  EXPECT_NEAR(r.summary.path_length, 4.0, 0.6);  // 4 m along the route; corners are cut
+  ASSERT_EQ(frames.clouds.size(), r.summary.num_frames);
+  std::size_t points = 0;
+  for (const PointCloud& c : frames.clouds) points += c.size();
+  EXPECT_EQ(points, r.summary.num_points);
 
-  const io::FrameDumpReader dump(dir);
-  ASSERT_EQ(dump.num_frames(), r.num_frames);
-  EXPECT_EQ(dump.meta().lidar.name, "coarse8");
-  EXPECT_TRUE(dump.meta().T_base_lidar.isApprox(s.T_base_lidar));
-  EXPECT_EQ(dump.meta().scenario, "indoor");
-  // gt.tum at the frame stamps, frames 1 / rate apart.
-  const Trajectory gt = dump.ground_truth();
-  ASSERT_EQ(gt.size(), dump.num_frames());
-  for (std::size_t i = 0; i < gt.size(); ++i) EXPECT_EQ(gt.stamps[i], dump.stamp(i));
-  EXPECT_NEAR(dump.stamp(1) - dump.stamp(0), 0.1, 1e-12);
+  // Ground truth at the frame stamps, frames 1 / rate apart.
+  const Trajectory& gt = r.ground_truth;
+  ASSERT_EQ(gt.size(), frames.stamps.size());
+  for (std::size_t i = 0; i < gt.size(); ++i) EXPECT_EQ(gt.stamps[i], frames.stamps[i]);
+  EXPECT_NEAR(frames.stamps[1] - frames.stamps[0], 0.1, 1e-12);
   // IMU at 200 Hz and wheels at 50 Hz over the whole run.
-  const Trajectory dense = dump.ground_truth_dense();
+  const Trajectory& dense = r.ground_truth_dense;
   const double span = dense.stamps.back() - dense.stamps.front();
-  EXPECT_NEAR(static_cast<double>(dump.imu().size()), span * 200.0 + 1.0, 1.0);
-  const auto wheels = dump.wheels();
-  EXPECT_NEAR(static_cast<double>(wheels.size()), span * 50.0 + 1.0, 1.0);
-  // odom.csv is the wheels integrated with the nominal parameters of meta.json.
-  const auto odom = dump.odometry();
-  const auto again = integrate_wheel_odometry(wheels, dump.meta().wheel_radius_left, dump.meta().wheel_radius_right,
-                                              dump.meta().axle);
-  ASSERT_EQ(odom.size(), again.size());
-  EXPECT_NEAR(odom.back().pose.x, again.back().pose.x, 1e-12);
-  EXPECT_NEAR(odom.back().pose.theta, again.back().pose.theta, 1e-12);
+  EXPECT_NEAR(static_cast<double>(r.imu.size()), span * 200.0 + 1.0, 1.0);
+  EXPECT_NEAR(static_cast<double>(r.wheels.size()), span * 50.0 + 1.0, 1.0);
+  // The odometry is the wheels integrated with the nominal parameters.
+  const auto again = integrate_wheel_odometry(r.wheels, s.wheels.radius, s.wheels.radius, s.wheels.axle);
+  ASSERT_EQ(r.odometry.size(), again.size());
+  EXPECT_EQ(r.odometry.back().pose.x, again.back().pose.x);
+  EXPECT_EQ(r.odometry.back().pose.theta, again.back().pose.theta);
   // Every frame: fields present; points on the ground, carried into the world by the true pose at
   // their own time, lie on the floor of the storey.
   std::vector<double> floor_dz;
-  for (std::size_t i = 0; i < dump.num_frames(); i += 7) {
-    const PointCloud c = dump.frame(i);
+  for (std::size_t i = 0; i < frames.clouds.size(); i += 7) {
+    const PointCloud& c = frames.clouds[i];
     ASSERT_FALSE(c.empty());
     ASSERT_TRUE(c.has_rings() && c.has_times() && c.has_labels() && c.has_intensities());
     for (std::size_t k = 0; k < c.size(); ++k) {
@@ -99,11 +96,11 @@ TEST(ScenarioTest, IndoorDumpIsConsistent) {
       ASSERT_LT(c.times[k], 0.1f);
       ASSERT_LT(c.rings[k], 8);
       if (c.labels[k] != kSimGround) continue;
-      const double t = dump.stamp(i) + c.times[k];
+      const double t = frames.stamps[i] + c.times[k];
       const auto it = std::lower_bound(dense.stamps.begin(), dense.stamps.end(), t);
       const std::size_t j = static_cast<std::size_t>(std::min<std::ptrdiff_t>(
           it - dense.stamps.begin(), static_cast<std::ptrdiff_t>(dense.size()) - 1));
-      const Vector3d p_world = dense.poses[j] * dump.meta().T_base_lidar * c.points[k].cast<double>();
+      const Vector3d p_world = dense.poses[j] * s.T_base_lidar * c.points[k].cast<double>();
       floor_dz.push_back(std::abs(p_world.z() - dense.poses[0].translation().z()));
     }
   }
@@ -115,17 +112,42 @@ TEST(ScenarioTest, IndoorDumpIsConsistent) {
 TEST(ScenarioTest, DeterministicForASeedWhateverTheThreads) {
   PLUMB_REQUIRE_DATA(path, "ifc/buildings/AC20-FZK-Haus.ifc");
   ScenarioSettings s = small_indoor(1.5);
-  const std::string a = fresh_dir("seed_a"), b = fresh_dir("seed_b"), c = fresh_dir("seed_c");
-  simulate_scenario(fzk_haus(), a, s);
+  Frames a, b, c;
+  const ScenarioRecording ra = simulate_scenario(fzk_haus(), s, a.sink());
   s.num_threads = 2;
-  simulate_scenario(fzk_haus(), b, s);
-  for (const char* f : {"frames.csv", "imu.csv", "wheels.csv", "odom.csv", "gt.tum", "frames/000003.pcd"}) {
-    EXPECT_EQ(slurp(a + "/" + f), slurp(b + "/" + f)) << f;
+  const ScenarioRecording rb = simulate_scenario(fzk_haus(), s, b.sink());
+  ASSERT_EQ(a.clouds.size(), b.clouds.size());
+  EXPECT_EQ(a.stamps, b.stamps);
+  for (std::size_t i = 0; i < a.clouds.size(); ++i) EXPECT_TRUE(same_cloud(a.clouds[i], b.clouds[i])) << i;
+  ASSERT_EQ(ra.imu.size(), rb.imu.size());
+  for (std::size_t i = 0; i < ra.imu.size(); ++i) {
+    ASSERT_TRUE(ra.imu[i].stamp == rb.imu[i].stamp && ra.imu[i].gyro == rb.imu[i].gyro &&
+                ra.imu[i].accel == rb.imu[i].accel) << i;
+  }
+  ASSERT_EQ(ra.wheels.size(), rb.wheels.size());
+  for (std::size_t i = 0; i < ra.wheels.size(); ++i) {
+    ASSERT_TRUE(ra.wheels[i].stamp == rb.wheels[i].stamp && ra.wheels[i].left == rb.wheels[i].left &&
+                ra.wheels[i].right == rb.wheels[i].right) << i;
   }
   s.seed = 6;
-  simulate_scenario(fzk_haus(), c, s);
-  EXPECT_NE(slurp(a + "/imu.csv"), slurp(c + "/imu.csv"));
-  EXPECT_NE(slurp(a + "/frames/000003.pcd"), slurp(c + "/frames/000003.pcd"));
+  const ScenarioRecording rc = simulate_scenario(fzk_haus(), s, c.sink());
+  ASSERT_EQ(rc.imu.size(), ra.imu.size());
+  EXPECT_NE(ra.imu[10].gyro, rc.imu[10].gyro);
+  ASSERT_GT(c.clouds.size(), 3u);
+  EXPECT_FALSE(same_cloud(a.clouds[3], c.clouds[3]));
+}
+
+// The frames are handed out one at a time: an exception from the sink ends the simulation there.
+TEST(ScenarioTest, AnExceptionFromTheSinkEndsTheSimulation) {
+  PLUMB_REQUIRE_DATA(path, "ifc/buildings/AC20-FZK-Haus.ifc");
+  std::size_t calls = 0;
+  EXPECT_THROW(simulate_scenario(fzk_haus(), small_indoor(1.5),
+                                 [&](std::size_t index, double, const PointCloud&) {
+                                   ++calls;
+                                   if (index == 2) throw Error("stop");
+                                 }),
+               Error);
+  EXPECT_EQ(calls, 3u);
 }
 
 TEST(ScenarioTest, IndoorRouteStaysInFreeSpaceAroundClutter) {
@@ -232,7 +254,7 @@ TEST(ScenarioTest, ModelWithoutWalkableStoreyIsAClearError) {
   PLUMB_REQUIRE_DATA(path, "ifc/unit/basic_shape_SweptSolid.ifc");
   const bim::BimMesh mesh = bim::build_mesh(bim::read_ifc(path));
   try {
-    simulate_scenario(mesh, fresh_dir("no_storey"), small_indoor(1.0));
+    simulate_scenario(mesh, small_indoor(1.0), ScenarioFrameSink());
     FAIL() << "expected plumb::Error";
   } catch (const Error& e) {
     const std::string msg = e.what();

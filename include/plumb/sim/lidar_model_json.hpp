@@ -2,8 +2,8 @@
 #pragma once
 
 /// @file
-/// @brief The LiDAR model file of `plumb simulate --lidar FILE.json`: a preset to start from and
-/// the fields to change, e.g.
+/// @brief The text of the LiDAR model file of `plumb simulate --lidar FILE.json` (the file is read by
+/// read_lidar_model() of app/simulate.hpp): a preset to start from and the fields to change, e.g.
 ///
 ///     {"preset": "vlp16", "columns": 900}
 ///     {"name": "my-16", "elevations_deg": [-15, -13, ..., 15], "columns": 1800, "rate_hz": 10,
@@ -25,9 +25,5 @@ namespace plumb::sim {
 /// @throws plumb::Error naming `name` (and for malformed JSON, the line and column) when the
 ///         text is not a JSON object, a value has the wrong type or the model fails validate().
 LidarModel parse_lidar_model(const std::string& text, const std::string& name = "<lidar model>");
-
-/// @brief parse_lidar_model() on a file.
-/// @throws plumb::Error naming the path when it cannot be opened or read, or as parse_lidar_model().
-LidarModel read_lidar_model(const std::string& path);
 
 }  // namespace plumb::sim

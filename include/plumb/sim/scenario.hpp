@@ -3,20 +3,24 @@
 
 /// @file
 /// @brief Simulation scenarios: a robot driving through (`indoor`) or around (`site`) a real
-///        building, with LiDAR frames, wheel encoders, wheel odometry, IMU and exact ground truth,
-///        written as a frame dump directory (io/frame_dump.hpp).
+///        building, with LiDAR frames, wheel encoders, wheel odometry, IMU and exact ground truth.
+///        The frames are handed to a callback as they are made; app/simulate.hpp writes them, with
+///        the rest, as a frame dump directory.
 
 #include <cstdint>
 #include <functional>
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <Eigen/Geometry>
 
 #include "plumb/bim/floor_plan.hpp"
 #include "plumb/bim/mesh.hpp"
-#include "plumb/io/frame_dump.hpp"
+#include "plumb/core/point_cloud.hpp"
+#include "plumb/core/sensor_data.hpp"
+#include "plumb/core/trajectory.hpp"
 #include "plumb/sim/imu_model.hpp"
 #include "plumb/sim/lidar.hpp"
 #include "plumb/sim/robot.hpp"
@@ -60,10 +64,6 @@ struct ScenarioSettings {
   Eigen::Isometry3d T_base_imu = Eigen::Isometry3d::Identity();    ///< IMU mounting on the base
   std::uint64_t seed = 1;        ///< the world, noise of every sensor: everything random depends on this only
   int num_threads = 1;           ///< frames simulated in parallel (results identical for any count)
-  io::FrameDumpWriteSettings dump;  ///< PCD encoding, overwrite
-  std::string model_name;        ///< recorded in meta.json
-  /// Called after each frame is written with (frames done, frames total); may be empty.
-  std::function<void(std::size_t, std::size_t)> progress;
 };
 
 /// @brief Defaults of a scenario kind (sensors, speeds, mounting).
@@ -96,17 +96,34 @@ struct ScenarioResult {
   std::string storey_name;
 };
 
-/// @brief Plan and run a scenario, writing a frame dump into `out_dir` (see io/frame_dump.hpp):
-///        one LiDAR sweep per 1 / lidar.rate_hz, wheels at wheels.rate_hz, odometry integrated with
-///        the nominal wheel parameters, IMU at imu.rate_hz, gt.tum at the frame stamps and
-///        gt_dense.tum at robot.rate_hz.
-/// @throws plumb::Error as plan_scenario(), or when the dump cannot be written.
+/// @brief Everything a simulation gives besides its LiDAR frames (those go to the ScenarioFrameSink).
+struct ScenarioRecording {
+  ScenarioResult summary;
+  std::vector<WheelEncoderReading> wheels;  ///< at wheels.rate_hz over the whole drive
+  std::vector<OdomSample> odometry;         ///< `wheels` integrated with the nominal wheel parameters
+  std::vector<ImuSample> imu;               ///< at imu.rate_hz, IMU frame
+  Trajectory ground_truth;                  ///< true T_world_base at the frame stamps
+  Trajectory ground_truth_dense;            ///< true T_world_base at robot.rate_hz
+};
+
+/// @brief Receives each LiDAR frame as soon as it is made, in order: its index, its stamp (start of
+///        the sweep [s]) and its points in the LiDAR frame (x y z intensity ring time label; time [s]
+///        since the stamp). The cloud is valid during the call only (copy what you keep). Called
+///        on the calling thread; an exception thrown by it ends the simulation. May be empty.
+using ScenarioFrameSink = std::function<void(std::size_t index, double stamp, const PointCloud& cloud_lidar)>;
+
+/// @brief Plan and run a scenario: one LiDAR sweep per 1 / lidar.rate_hz handed to `on_frame`,
+///        wheels at wheels.rate_hz, odometry integrated with the nominal wheel parameters, IMU at
+///        imu.rate_hz, ground truth at the frame stamps and at robot.rate_hz. Frames are not held:
+///        at most num_threads of them are in memory at a time.
+/// @throws plumb::Error as plan_scenario(); what `on_frame` throws.
 /// @note Deterministic for a seed, whatever num_threads.
-ScenarioResult simulate_scenario(const bim::BimMesh& mesh, const std::string& out_dir,
-                                 const ScenarioSettings& settings);
+ScenarioRecording simulate_scenario(const bim::BimMesh& mesh, const ScenarioSettings& settings,
+                                    const ScenarioFrameSink& on_frame);
 
 /// @brief simulate_scenario() on a plan made before.
-ScenarioResult simulate_scenario(const ScenarioPlan& plan, const std::string& out_dir,
-                                 const ScenarioSettings& settings);
+/// @throws plumb::Error on bad settings or an empty plan; what `on_frame` throws.
+ScenarioRecording simulate_scenario(const ScenarioPlan& plan, const ScenarioSettings& settings,
+                                    const ScenarioFrameSink& on_frame);
 
 }  // namespace plumb::sim
