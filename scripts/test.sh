@@ -52,6 +52,12 @@ if grep -Eq '(libz\.|-lz( |$)|lzf)' build/package/CMakeFiles/plumb_core_consumer
   cat build/package/CMakeFiles/plumb_core_consumer.dir/link.txt >&2
   exit 1
 fi
+# plumb::sim reads and writes no file: its consumer does not link plumb::io.
+if grep -q 'plumb_io' build/package/CMakeFiles/plumb_sim_consumer.dir/link.txt; then
+  echo "test.sh: plumb::sim's consumer links plumb::io:" >&2
+  cat build/package/CMakeFiles/plumb_sim_consumer.dir/link.txt >&2
+  exit 1
+fi
 
 step "README command 1's demo steps on this build (scripts/run_demo.sh)"
 # The same script scripts/demo.sh ends with: if a new user's first command would fail, CI fails.
