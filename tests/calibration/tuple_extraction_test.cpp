@@ -24,7 +24,7 @@ using plumb::OdometryLaserParams;
 using plumb::Pose2;
 using plumb::WheelEncoderReading;
 
-const OdometryLaserParams kTruth{0.05, 0.0502, 0.32, Pose2{0.12, -0.03, 0.4}};
+const OdometryLaserParams kTrueParams{0.05, 0.0502, 0.32, Pose2{0.12, -0.03, 0.4}};
 constexpr double kSegment = 0.8;  // wheel speeds change every 0.8 s (on the encoder grid)
 
 struct Sim {
@@ -49,8 +49,8 @@ struct Sim {
     for (int s = 0; s < static_cast<int>(phi_l.size()); ++s) {
       const double t0 = s * kSegment, dt = std::clamp(t - t0, 0.0, kSegment);
       if (dt <= 0.0) break;
-      const double vl = kTruth.radius_left * phi_l[s], vr = kTruth.radius_right * phi_r[s];
-      const double v = 0.5 * (vl + vr), w = (vr - vl) / kTruth.axle, th = w * dt;
+      const double vl = kTrueParams.radius_left * phi_l[s], vr = kTrueParams.radius_right * phi_r[s];
+      const double v = 0.5 * (vl + vr), w = (vr - vl) / kTrueParams.axle, th = w * dt;
       const Pose2 r = std::abs(w) < 1e-15 ? Pose2{v * dt, 0, 0}
                                           : Pose2{v / w * std::sin(th), v / w * (1 - std::cos(th)), th};
       q = q.oplus(r);
@@ -133,12 +133,12 @@ TEST(TupleExtractionTest, ExtractedTuplesCalibrateToTruth) {
     ++calls;
     if (sim.segment(ref.stamp) != sim.segment(cur.stamp)) return std::nullopt;
     const Pose2 r = sim.pose(ref.stamp).ominus().oplus(sim.pose(cur.stamp));
-    const Pose2 s = kTruth.laser.ominus().oplus(r).oplus(kTruth.laser);
+    const Pose2 s = kTrueParams.laser.ominus().oplus(r).oplus(kTrueParams.laser);
     max_guess_error = std::max(max_guess_error, (s.vector() - guess.vector()).cwiseAbs().maxCoeff());
     return s;
   };
   plumb::TupleExtractionSettings settings;
-  settings.nominal = kTruth;  // then the guess is the true motion
+  settings.nominal = kTrueParams;  // then the guess is the true motion
   const auto ex = plumb::extract_calibration_tuples(log_scans, wheels, matcher, settings);
   ASSERT_EQ(ex.status, plumb::Status::kOk);
   EXPECT_EQ(ex.num_pairs, log_scans.size() - 1);
@@ -157,7 +157,7 @@ TEST(TupleExtractionTest, ExtractedTuplesCalibrateToTruth) {
   }
   const auto est = plumb::calibrate_odometry_laser(ex.tuples);
   ASSERT_EQ(est.status, plumb::Status::kOk);
-  EXPECT_LT((est.params.vector() - kTruth.vector()).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_LT((est.params.vector() - kTrueParams.vector()).cwiseAbs().maxCoeff(), 1e-9);
 }
 
 TEST(TupleExtractionTest, SpacedPairsAndEncoderGaps) {
@@ -269,7 +269,7 @@ TEST(TupleExtractionTest, PlicpTuplesFromSimulatedRoomCalibrate) {
   for (const LaserScan& s : scans(sim)) {
     // Start near the room's middle; the laser sees the walls and boxes.
     const Pose2 q = Pose2{0.3, 0.2, 0.1}.oplus(sim.pose(s.stamp));
-    log_scans.push_back(cast_scan(q.oplus(kTruth.laser), s.stamp));
+    log_scans.push_back(cast_scan(q.oplus(kTrueParams.laser), s.stamp));
   }
   // Nominal parameters a few percent off, as a user would know them.
   plumb::TupleExtractionSettings settings;
@@ -284,7 +284,7 @@ TEST(TupleExtractionTest, PlicpTuplesFromSimulatedRoomCalibrate) {
   EXPECT_GE(ex.tuples.size(), sim.phi_l.size() - 3);  // PLICP matched (almost) every pair
   const auto est = plumb::calibrate_odometry_laser(ex.tuples);
   ASSERT_EQ(est.status, plumb::Status::kOk);
-  const plumb::Vector6d err = est.params.vector() - kTruth.vector();
+  const plumb::Vector6d err = est.params.vector() - kTrueParams.vector();
   // Noise-free scans of straight walls: PLICP's point-to-line solution is exact up to its
   // stopping tolerance, so the whole chain recovers the parameters to ~1e-8.
   for (int j = 0; j < 6; ++j) EXPECT_LT(std::abs(err(j)), 1e-6) << "parameter " << j;

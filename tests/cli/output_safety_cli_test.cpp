@@ -32,7 +32,7 @@ using test::CliTest;
 using test::run_cli;
 using Json = nlohmann::json;
 
-std::string demo_model() { return std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc"; }
+std::string office_ifc() { return std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc"; }
 
 std::string q(const std::string& s) { return "'" + s + "'"; }
 
@@ -53,7 +53,7 @@ const std::string& base_dump() {
     dir = unique("base_dump");
     fs::remove_all(dir);
     const test::RunResult r =
-        run_cli("simulate " + q(demo_model()) + " -o " + q(dir) + " --lidar vlp16 --length 2 --seed 4");
+        run_cli("simulate " + q(office_ifc()) + " -o " + q(dir) + " --lidar vlp16 --length 2 --seed 4");
     EXPECT_EQ(r.exit_code, 0) << r.err;
   }
   return dir;
@@ -95,7 +95,7 @@ std::vector<std::string> lines_of(const std::string& path) {
   return out;
 }
 
-void write_lines(const std::string& path, const std::vector<std::string>& lines) {
+void write_file_lines(const std::string& path, const std::vector<std::string>& lines) {
   std::ofstream out(path);
   for (const std::string& l : lines) out << l << '\n';
 }
@@ -120,7 +120,7 @@ bool has_staging_leftover(const std::string& dir) {
 }
 
 std::string run_args(const std::string& dump, const std::string& out, const std::string& extra = "") {
-  return "run " + q(dump) + " --bim " + q(demo_model()) + " -o " + q(out) + " --gt-start " + extra;
+  return "run " + q(dump) + " --bim " + q(office_ifc()) + " -o " + q(out) + " --gt-start " + extra;
 }
 
 double seconds_of(const std::function<void()>& f) {
@@ -143,7 +143,7 @@ TEST_F(CliTest, UnwritableOutputFailsBeforeAnyFrameIsProcessed) {
     EXPECT_LT(seconds_of([&] { r = run_cli("lio " + q(dump) + " --mode loam -o " + q(out)); }), 5.0);
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.err.find(out), std::string::npos) << r.err;
-    EXPECT_LT(seconds_of([&] { r = run_cli("simulate " + q(demo_model()) + " -o " + q(out) + " --length 2"); }), 5.0);
+    EXPECT_LT(seconds_of([&] { r = run_cli("simulate " + q(office_ifc()) + " -o " + q(out) + " --length 2"); }), 5.0);
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.err.find(out), std::string::npos) << r.err;
     EXPECT_LT(seconds_of([&] { r = run_cli("demo -o " + q(out) + " --length 2"); }), 5.0);
@@ -163,7 +163,7 @@ TEST_F(CliTest, ForeignFilesAreRefusedWithoutOverwriteAndLeftUntouched) {
   std::ofstream(out + "/notes.txt") << "field notes\n";
   for (const std::string& args :
        {run_args(dump, out, "--max-frames 3"), "lio " + q(dump) + " --mode loam --max-frames 3 -o " + q(out),
-        "simulate " + q(demo_model()) + " -o " + q(out) + " --length 2", "demo -o " + q(out) + " --length 2"}) {
+        "simulate " + q(office_ifc()) + " -o " + q(out) + " --length 2", "demo -o " + q(out) + " --length 2"}) {
     const test::RunResult r = run_cli(args);
     EXPECT_EQ(r.exit_code, 1) << args;
     EXPECT_NE(r.err.find(out), std::string::npos) << r.err;
@@ -177,7 +177,7 @@ TEST_F(CliTest, ForeignFilesAreRefusedWithoutOverwriteAndLeftUntouched) {
   fs::remove_all(dump_out);
   fs::create_directories(dump_out);
   std::ofstream(dump_out + "/odom.csv") << "stamp,x,y,theta\n0,0,0,0\n";
-  test::RunResult r = run_cli("simulate " + q(demo_model()) + " -o " + q(dump_out) + " --length 2");
+  test::RunResult r = run_cli("simulate " + q(office_ifc()) + " -o " + q(dump_out) + " --length 2");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("odom.csv"), std::string::npos) << r.err;
   EXPECT_EQ(test::read_text(dump_out + "/odom.csv"), "stamp,x,y,theta\n0,0,0,0\n");
@@ -212,15 +212,15 @@ TEST_F(CliTest, OverwriteReplacesTheWholeDumpWithoutStaleFrames) {
   const std::string dir = unique("overwrite_dump");
   fs::remove_all(dir);
   const std::string lidar = tiny_lidar("overwrite_lidar");
-  test::RunResult r = run_cli("simulate " + q(demo_model()) + " -o " + q(dir) + " --lidar " + q(lidar) + " --length 4");
+  test::RunResult r = run_cli("simulate " + q(office_ifc()) + " -o " + q(dir) + " --lidar " + q(lidar) + " --length 4");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::size_t long_frames = io::FrameDumpReader(dir).num_frames();
   // Without --overwrite an earlier dump is kept.
-  r = run_cli("simulate " + q(demo_model()) + " -o " + q(dir) + " --lidar " + q(lidar) + " --length 2");
+  r = run_cli("simulate " + q(office_ifc()) + " -o " + q(dir) + " --lidar " + q(lidar) + " --length 2");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--overwrite"), std::string::npos) << r.err;
   EXPECT_EQ(io::FrameDumpReader(dir).num_frames(), long_frames);
-  r = run_cli("simulate " + q(demo_model()) + " -o " + q(dir) + " --lidar " + q(lidar) + " --length 2 --overwrite");
+  r = run_cli("simulate " + q(office_ifc()) + " -o " + q(dir) + " --lidar " + q(lidar) + " --length 2 --overwrite");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const io::FrameDumpReader dump(dir);
   ASSERT_LT(dump.num_frames(), long_frames);
@@ -295,7 +295,7 @@ TEST_F(CliTest, OdometryAndGroundTruthNotCoveringTheFramesAreNamed) {
     for (std::size_t i = 1; i < odom.size(); ++i) {
       if (std::stod(odom[i].substr(0, odom[i].find(','))) <= t_end) keep.push_back(odom[i]);
     }
-    write_lines(dump + "/odom.csv", keep);
+    write_file_lines(dump + "/odom.csv", keep);
   };
   const std::string out = unique("coverage_out");
   fs::remove_all(out);
@@ -315,9 +315,9 @@ TEST_F(CliTest, OdometryAndGroundTruthNotCoveringTheFramesAreNamed) {
   EXPECT_EQ(j.at("odometry_clamped_frames"), 1);
 
   // gt.tum shorter than the frames: said on stderr and in report.json (run and lio).
-  write_lines(dump + "/odom.csv", odom);
+  write_file_lines(dump + "/odom.csv", odom);
   std::vector<std::string> gt = lines_of(dump + "/gt.tum");
-  write_lines(dump + "/gt.tum", std::vector<std::string>(gt.begin(), gt.begin() + 4));
+  write_file_lines(dump + "/gt.tum", std::vector<std::string>(gt.begin(), gt.begin() + 4));
   r = run_cli(run_args(dump, out, "--max-frames 6"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("gt.tum"), std::string::npos) << r.err;
@@ -332,7 +332,7 @@ TEST_F(CliTest, OdometryAndGroundTruthNotCoveringTheFramesAreNamed) {
   ASSERT_FALSE(j.at("warnings").empty());
   // lio checks gt.tum's stamps against the frames, as run does.
   gt[2] = "999" + gt[2].substr(gt[2].find(' '));
-  write_lines(dump + "/gt.tum", gt);
+  write_file_lines(dump + "/gt.tum", gt);
   r = run_cli("lio " + q(dump) + " --mode loam --max-frames 6 -o " + q(out + "_lio"));
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("gt.tum"), std::string::npos) << r.err;
@@ -437,7 +437,7 @@ TEST_F(CliTest, CountAndSizeOptionsHaveLimits) {
   fs::remove_all(out);
   auto simulate = [&](const std::string& extra) {
     test::RunResult r;
-    EXPECT_LT(seconds_of([&] { r = run_cli("simulate " + q(demo_model()) + " -o " + q(out) + " " + extra); }), 10.0)
+    EXPECT_LT(seconds_of([&] { r = run_cli("simulate " + q(office_ifc()) + " -o " + q(out) + " " + extra); }), 10.0)
         << extra;
     return r;
   };

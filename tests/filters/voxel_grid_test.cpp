@@ -20,8 +20,8 @@
 namespace plumb {
 namespace {
 
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr float kQuietNaN = std::numeric_limits<float>::quiet_NaN();
+constexpr float kInfinity = std::numeric_limits<float>::infinity();
 
 // ---- brute-force oracle ---------------------------------------------------------------------
 // Voxel coordinates floor((p - min) / leaf) in double (the documented convention), grouped in a
@@ -289,9 +289,9 @@ TEST(VoxelGridTest, NonFinitePointsAreDroppedAndCounted) {
   PointCloud finite_only = cloud;
   // Replace 7 points by non-finite ones, in the original and by removal in the reference cloud.
   const std::vector<std::size_t> bad = {0, 5, 99, 500, 501, 998, 999};
-  const Vector3f bad_points[] = {Vector3f(kNaN, 0, 0), Vector3f(0, kInf, 0), Vector3f(0, 0, -kInf),
-                                 Vector3f(kNaN, kNaN, kNaN), Vector3f(1, 1, kNaN),
-                                 Vector3f(-kInf, 1, 1), Vector3f(kInf, kInf, kInf)};
+  const Vector3f bad_points[] = {Vector3f(kQuietNaN, 0, 0), Vector3f(0, kInfinity, 0), Vector3f(0, 0, -kInfinity),
+                                 Vector3f(kQuietNaN, kQuietNaN, kQuietNaN), Vector3f(1, 1, kQuietNaN),
+                                 Vector3f(-kInfinity, 1, 1), Vector3f(kInfinity, kInfinity, kInfinity)};
   std::vector<std::size_t> keep;
   for (std::size_t i = 0, b = 0; i < cloud.size(); ++i) {
     if (b < bad.size() && bad[b] == i) {
@@ -320,7 +320,7 @@ TEST(VoxelGridTest, NonFinitePointsAreDroppedAndCounted) {
   expect_nearest_matches_oracle(cloud, 0.5, 1);
 
   PointCloud all_bad;
-  all_bad.points = {Vector3f(kNaN, 0, 0), Vector3f(0, kInf, 0)};
+  all_bad.points = {Vector3f(kQuietNaN, 0, 0), Vector3f(0, kInfinity, 0)};
   const VoxelGridResult r = voxel_grid(all_bad);
   EXPECT_TRUE(r.cloud.empty());
   EXPECT_EQ(r.num_dropped_non_finite, 2u);
@@ -378,8 +378,8 @@ TEST(VoxelGridTest, MinPointsPerVoxelDropsSparseVoxels) {
 
 TEST(VoxelGridTest, InvalidSettingsThrow) {
   const PointCloud cloud = random_cloud(51, 10, 0.0, 1.0, false);
-  for (double leaf : {0.0, -0.1, static_cast<double>(kNaN), static_cast<double>(kInf),
-                      -static_cast<double>(kInf)}) {
+  for (double leaf : {0.0, -0.1, static_cast<double>(kQuietNaN), static_cast<double>(kInfinity),
+                      -static_cast<double>(kInfinity)}) {
     VoxelGridSettings s;
     s.leaf_size = leaf;
     EXPECT_THROW(voxel_grid(cloud, s), Error) << "leaf " << leaf;

@@ -19,9 +19,9 @@ namespace {
 
 using plumb::test::temp_path;
 
-PointCloud read_string(const std::string& bytes) { return read_ply_buffer(bytes.data(), bytes.size(), "mem.ply"); }
+PointCloud parse_ply(const std::string& bytes) { return read_ply_buffer(bytes.data(), bytes.size(), "mem.ply"); }
 
-PointCloud make_full_cloud(std::size_t n, unsigned seed) {
+PointCloud make_full_ply_cloud(std::size_t n, unsigned seed) {
   PointCloud c = test::random_full_cloud(n, seed, 50.0f, 1e-4f);
   if (n >= 3) {
     c.points[1] = Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
@@ -146,9 +146,9 @@ void check_fixture(const PointCloud& c) {
 }
 
 TEST(PlyTest, ReadsHandBuiltFixtureInEveryFormat) {
-  check_fixture(read_string(fixture(Enc::kAscii)));
-  check_fixture(read_string(fixture(Enc::kLittle)));
-  check_fixture(read_string(fixture(Enc::kBig)));
+  check_fixture(parse_ply(fixture(Enc::kAscii)));
+  check_fixture(parse_ply(fixture(Enc::kLittle)));
+  check_fixture(parse_ply(fixture(Enc::kBig)));
 }
 
 TEST(PlyTest, ReadsFromFileAndToleratesCrlfHeader) {
@@ -172,7 +172,7 @@ TEST(PlyTest, ReadsFromFileAndToleratesCrlfHeader) {
 }
 
 TEST(PlyTest, MinimalXyzAndAliases) {
-  const PointCloud c = read_string(
+  const PointCloud c = parse_ply(
       "ply\nformat ascii 1.0\nelement vertex 2\nproperty float32 x\nproperty float32 y\nproperty float32 z\n"
       "property float normal_x\nproperty float normal_y\nproperty float normal_z\nend_header\n"
       "1 2 3 0 0 1\n  4   5\t6 1 0 0");
@@ -180,14 +180,14 @@ TEST(PlyTest, MinimalXyzAndAliases) {
   EXPECT_EQ(c.points[1], Vector3f(4, 5, 6));
   EXPECT_EQ(c.normals[1], Vector3f(1, 0, 0));
   // A lone nx is not a normal.
-  const PointCloud d = read_string(
+  const PointCloud d = parse_ply(
       "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
       "property float nx\nend_header\n1 2 3 4\n");
   EXPECT_FALSE(d.has_normals());
 }
 
 TEST(PlyTest, RoundTripIsExactInBothEncodings) {
-  const PointCloud c = make_full_cloud(300, 4);
+  const PointCloud c = make_full_ply_cloud(300, 4);
   for (PlyEncoding e : {PlyEncoding::kAscii, PlyEncoding::kBinaryLittleEndian}) {
     SCOPED_TRACE(static_cast<int>(e));
     PlyWriteSettings ws;
@@ -195,16 +195,16 @@ TEST(PlyTest, RoundTripIsExactInBothEncodings) {
     expect_file_round_trip(c, ws, "ply_roundtrip.ply", write_ply, read_ply);
     PointCloud xyz;
     xyz.points = c.points;
-    expect_same_cloud(xyz, read_string(write_ply_buffer(xyz, ws)));
-    expect_same_cloud(PointCloud{}, read_string(write_ply_buffer(PointCloud{}, ws)));
+    expect_same_cloud(xyz, parse_ply(write_ply_buffer(xyz, ws)));
+    expect_same_cloud(PointCloud{}, parse_ply(write_ply_buffer(PointCloud{}, ws)));
   }
 }
 
 TEST(PlyTest, WriteRejectsInconsistentCloudAndBadPath) {
-  PointCloud c = make_full_cloud(5, 1);
+  PointCloud c = make_full_ply_cloud(5, 1);
   c.rings.pop_back();
   expect_error([&] { write_ply(temp_path("ply_bad.ply"), c); }, {"ply_bad.ply", "rings"});
-  expect_error([] { write_ply("/nonexistent_dir/a.ply", make_full_cloud(2, 1)); }, {"/nonexistent_dir/a.ply"});
+  expect_error([] { write_ply("/nonexistent_dir/a.ply", make_full_ply_cloud(2, 1)); }, {"/nonexistent_dir/a.ply"});
 }
 
 // ---- bad input ---------------------------------------------------------------------------------
@@ -212,27 +212,27 @@ TEST(PlyTest, WriteRejectsInconsistentCloudAndBadPath) {
 TEST(PlyTest, NonexistentAndEmptyInputThrow) {
   expect_error([] { read_ply("/nonexistent/x.ply"); }, {"/nonexistent/x.ply"});
   expect_error([] { read_ply_buffer(nullptr, 0, "e.ply"); }, {"e.ply", "empty"});
-  expect_error([] { read_string("plx\n"); }, {"mem.ply:1", "not a PLY"});
+  expect_error([] { parse_ply("plx\n"); }, {"mem.ply:1", "not a PLY"});
 }
 
 TEST(PlyTest, MalformedHeaderThrows) {
   const std::string xyz = "element vertex 1\nproperty float x\nproperty float y\nproperty float z\n";
-  expect_error([&] { read_string("ply\n" + xyz + "end_header\n1 2 3\n"); }, {"format"});
-  expect_error([&] { read_string("ply\nformat binary_middle_endian 1.0\n" + xyz + "end_header\n"); },
+  expect_error([&] { parse_ply("ply\n" + xyz + "end_header\n1 2 3\n"); }, {"format"});
+  expect_error([&] { parse_ply("ply\nformat binary_middle_endian 1.0\n" + xyz + "end_header\n"); },
                {"mem.ply:2", "binary_middle_endian"});
-  expect_error([&] { read_string("ply\nformat ascii 1.0\n" + xyz); }, {"no end_header"});
-  expect_error([&] { read_string("ply\nformat ascii 1.0\nelement vertex 1\nproperty quad x\nend_header\n"); },
+  expect_error([&] { parse_ply("ply\nformat ascii 1.0\n" + xyz); }, {"no end_header"});
+  expect_error([&] { parse_ply("ply\nformat ascii 1.0\nelement vertex 1\nproperty quad x\nend_header\n"); },
                {"mem.ply:4", "quad"});
-  expect_error([&] { read_string("ply\nformat ascii 1.0\nelement vertex 1\nproperty list float int x\nend_header\n"); },
+  expect_error([&] { parse_ply("ply\nformat ascii 1.0\nelement vertex 1\nproperty list float int x\nend_header\n"); },
                {"mem.ply:4"});
-  expect_error([&] { read_string("ply\nformat ascii 1.0\nproperty float x\nend_header\n"); }, {"mem.ply:3"});
-  expect_error([&] { read_string("ply\nformat ascii 1.0\nelement vertex -1\nend_header\n"); }, {"mem.ply:3"});
-  expect_error([&] { read_string("ply\nformat ascii 1.0\nelement face 1\nproperty uchar a\nend_header\n1\n"); },
+  expect_error([&] { parse_ply("ply\nformat ascii 1.0\nproperty float x\nend_header\n"); }, {"mem.ply:3"});
+  expect_error([&] { parse_ply("ply\nformat ascii 1.0\nelement vertex -1\nend_header\n"); }, {"mem.ply:3"});
+  expect_error([&] { parse_ply("ply\nformat ascii 1.0\nelement face 1\nproperty uchar a\nend_header\n1\n"); },
                {"no 'element vertex'"});
   expect_error(
-      [&] { read_string("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nend_header\n1 2\n"); },
+      [&] { parse_ply("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nend_header\n1 2\n"); },
       {"mem.ply:3", "x, y or z"});
-  expect_error([&] { read_string("ply\nformat ascii 1.0\nbogus line\n" + xyz + "end_header\n"); }, {"mem.ply:3", "bogus"});
+  expect_error([&] { parse_ply("ply\nformat ascii 1.0\nbogus line\n" + xyz + "end_header\n"); }, {"mem.ply:3", "bogus"});
 }
 
 TEST(PlyTest, TruncatedDataThrowsInEveryFormat) {
@@ -240,18 +240,18 @@ TEST(PlyTest, TruncatedDataThrowsInEveryFormat) {
     const std::string full = fixture(enc);
     const std::size_t data_start = full.find("end_header\n") + 11;
     for (std::size_t cut = data_start; cut < full.size(); ++cut) {
-      EXPECT_THROW(read_string(full.substr(0, cut)), Error) << "cut at " << cut;
+      EXPECT_THROW(parse_ply(full.substr(0, cut)), Error) << "cut at " << cut;
     }
   }
   // ascii: cut at line starts (a cut inside the last number can still be a number).
   const std::string full = fixture(Enc::kAscii);
   const std::size_t data_start = full.find("end_header\n") + 11;
   for (std::size_t at = data_start; at < full.size(); at = full.find('\n', at) + 1) {
-    EXPECT_THROW(read_string(full.substr(0, at)), Error) << "cut at " << at;
+    EXPECT_THROW(parse_ply(full.substr(0, at)), Error) << "cut at " << at;
   }
-  expect_error([&] { read_string(full.substr(0, full.find('\n', data_start) + 1)); }, {"mem.ply:24", "truncated"});
+  expect_error([&] { parse_ply(full.substr(0, full.find('\n', data_start) + 1)); }, {"mem.ply:24", "truncated"});
   const std::string bin = fixture(Enc::kLittle);
-  expect_error([&] { read_string(bin.substr(0, bin.size() - 3)); }, {"mem.ply", "byte"});
+  expect_error([&] { parse_ply(bin.substr(0, bin.size() - 3)); }, {"mem.ply", "byte"});
 }
 
 TEST(PlyTest, LyingCountsThrowWithoutHugeAllocation) {
@@ -259,7 +259,7 @@ TEST(PlyTest, LyingCountsThrowWithoutHugeAllocation) {
   for (const char* count : {"1000000000000", "18446744073709551615", "4294967296"}) {
     SCOPED_TRACE(count);
     for (const char* fmt : {"ascii", "binary_little_endian", "binary_big_endian"}) {
-      expect_error([&] { read_string(std::string("ply\nformat ") + fmt + " 1.0\nelement vertex " + count + "\n" + props + "1 2 3\n"); },
+      expect_error([&] { parse_ply(std::string("ply\nformat ") + fmt + " 1.0\nelement vertex " + count + "\n" + props + "1 2 3\n"); },
                    {"mem.ply", "vertex"});
     }
   }
@@ -269,17 +269,17 @@ TEST(PlyTest, LyingCountsThrowWithoutHugeAllocation) {
   for (float v : {1.0f, 2.0f, 3.0f}) s.append(reinterpret_cast<const char*>(&v), 4);
   const std::uint32_t huge = 0xffffffffu;
   s.append(reinterpret_cast<const char*>(&huge), 4);
-  expect_error([&] { read_string(s); }, {"mem.ply", "byte", "junk"});
+  expect_error([&] { parse_ply(s); }, {"mem.ply", "byte", "junk"});
   // Negative list length.
   std::string n = "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
                   "property float z\nproperty list char float junk\nend_header\n";
   for (float v : {1.0f, 2.0f, 3.0f}) n.append(reinterpret_cast<const char*>(&v), 4);
   n += static_cast<char>(-3);
-  expect_error([&] { read_string(n); }, {"negative"});
-  expect_error([&] { read_string("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+  expect_error([&] { parse_ply(n); }, {"negative"});
+  expect_error([&] { parse_ply("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
                                  "property float z\nproperty list int float junk\nend_header\n1 2 3 -1\n"); },
                {"mem.ply:9", "junk"});
-  expect_error([&] { read_string("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+  expect_error([&] { parse_ply("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
                                  "property float z\nproperty list int float junk\nend_header\n1 2 3 1000000 4 5\n"); },
                {"truncated inside list"});
 }
@@ -287,10 +287,10 @@ TEST(PlyTest, LyingCountsThrowWithoutHugeAllocation) {
 TEST(PlyTest, BadValuesThrowWithLine) {
   const std::string h = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
                         "property float ring\nend_header\n";
-  expect_error([&] { read_string(h + "1 2 3 4\n1 y 3 4\n"); }, {"mem.ply:10", "'y'"});
-  expect_error([&] { read_string(h + "1 2 3 4\n1 2 3 -4\n"); }, {"mem.ply:10", "ring"});
-  expect_error([&] { read_string(h + "1 2 3 4.5\n1 2 3 4\n"); }, {"mem.ply:9", "ring"});
-  EXPECT_EQ(read_string(h + "1 2 3 4\n1 2 3 65535\n").rings[1], 65535);
+  expect_error([&] { parse_ply(h + "1 2 3 4\n1 y 3 4\n"); }, {"mem.ply:10", "'y'"});
+  expect_error([&] { parse_ply(h + "1 2 3 4\n1 2 3 -4\n"); }, {"mem.ply:10", "ring"});
+  expect_error([&] { parse_ply(h + "1 2 3 4.5\n1 2 3 4\n"); }, {"mem.ply:9", "ring"});
+  EXPECT_EQ(parse_ply(h + "1 2 3 4\n1 2 3 65535\n").rings[1], 65535);
 }
 
 }  // namespace

@@ -21,15 +21,15 @@
 namespace plumb {
 namespace {
 
-constexpr double kDeg = kPi / 180.0;
+constexpr double kDegree = kPi / 180.0;
 
-struct Box {
+struct RoomBox {
   Vector3d lo, hi;
 };
 
 // The room (seen from inside) and solid obstacles (seen from outside), world frame [m].
-const Box kRoom{{-6.0, -5.0, -1.2}, {9.0, 7.0, 2.8}};
-const std::vector<Box> kObstacles = {
+const RoomBox kRoom{{-6.0, -5.0, -1.2}, {9.0, 7.0, 2.8}};
+const std::vector<RoomBox> kObstacles = {
     {{2.0, 1.5, -1.2}, {2.6, 2.3, 2.8}},     // pillar
     {{-3.0, -2.5, -1.2}, {-2.2, -1.8, 2.8}}, // pillar
     {{3.5, -3.5, -1.2}, {4.5, -2.5, 0.0}},   // crate
@@ -44,7 +44,7 @@ double cast(const Vector3d& o, const Vector3d& d) {
     if (d(a) < -1e-12) t_room = std::min(t_room, (kRoom.lo(a) - o(a)) / d(a));
   }
   double best = t_room;
-  for (const Box& b : kObstacles) {
+  for (const RoomBox& b : kObstacles) {
     double t0 = -std::numeric_limits<double>::infinity(), t1 = std::numeric_limits<double>::infinity();
     for (int a = 0; a < 3; ++a) {
       if (std::abs(d(a)) < 1e-12) {
@@ -74,9 +74,9 @@ PointCloud scan(const Eigen::Isometry3d& T_world_sensor, bool with_rings = true)
   const Matrix3d R = T_world_sensor.linear();
   const Vector3d o = T_world_sensor.translation();
   for (int c = 0; c < 1800; ++c) {
-    const double beta = (c + 0.5) * 0.2 * kDeg;
+    const double beta = (c + 0.5) * 0.2 * kDegree;
     for (int r = 0; r < 16; ++r) {
-      const double alpha = angles[static_cast<std::size_t>(r)] * kDeg;
+      const double alpha = angles[static_cast<std::size_t>(r)] * kDegree;
       const Vector3d d(std::cos(alpha) * std::sin(beta), std::cos(alpha) * std::cos(beta), std::sin(alpha));
       const double t = cast(o, R * d);
       cloud.points.push_back((t * d).cast<float>());
@@ -94,7 +94,7 @@ double distance_to_box_edges(const Vector3d& x) {
     const double s = std::clamp((x - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
     best = std::min(best, (a + s * ab - x).norm());
   };
-  auto box_edges = [&](const Box& b) {
+  auto box_edges = [&](const RoomBox& b) {
     for (int a = 0; a < 3; ++a) {
       const int u = (a + 1) % 3, v = (a + 2) % 3;
       for (int i = 0; i < 2; ++i) {
@@ -110,14 +110,14 @@ double distance_to_box_edges(const Vector3d& x) {
     }
   };
   box_edges(kRoom);
-  for (const Box& b : kObstacles) box_edges(b);
+  for (const RoomBox& b : kObstacles) box_edges(b);
   return best;
 }
 
 Eigen::Isometry3d pose(double x, double y, double z, double yaw_deg, double pitch_deg, double roll_deg) {
-  const Matrix3d R = (Eigen::AngleAxisd(yaw_deg * kDeg, Vector3d::UnitZ()) *
-                      Eigen::AngleAxisd(pitch_deg * kDeg, Vector3d::UnitY()) *
-                      Eigen::AngleAxisd(roll_deg * kDeg, Vector3d::UnitX()))
+  const Matrix3d R = (Eigen::AngleAxisd(yaw_deg * kDegree, Vector3d::UnitZ()) *
+                      Eigen::AngleAxisd(pitch_deg * kDegree, Vector3d::UnitY()) *
+                      Eigen::AngleAxisd(roll_deg * kDegree, Vector3d::UnitX()))
                          .toRotationMatrix();
   return se3::make(R, Vector3d(x, y, z));
 }
@@ -126,7 +126,7 @@ double translation_error(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b)
   return (a.inverse() * b).translation().norm();
 }
 double rotation_error_deg(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
-  return so3::log((a.inverse() * b).linear()).norm() / kDeg;
+  return so3::log((a.inverse() * b).linear()).norm() / kDegree;
 }
 
 RangeImageSettings image_settings() {
@@ -154,7 +154,9 @@ TEST(RangeImageTest, RowsAreRingsAndColumnsAreAzimuthBins) {
       EXPECT_NEAR(img.range_at(r, c), cloud.points[static_cast<std::size_t>(c * 16 + r)].norm(), 1e-5);
     }
   }
-  for (int r = 0; r < 16; ++r) EXPECT_NEAR(img.row_elevation[static_cast<std::size_t>(r)] / kDeg, -15.0 + 2.0 * r, 1e-4);
+  for (int r = 0; r < 16; ++r) {
+    EXPECT_NEAR(img.row_elevation[static_cast<std::size_t>(r)] / kDegree, -15.0 + 2.0 * r, 1e-4);
+  }
 }
 
 TEST(RangeImageTest, AutoBinningAndVerticalAnglesReproduceTheRingField) {
@@ -282,7 +284,7 @@ TEST(LoamFeaturesTest, CosineIntervalsCountWhatTheyShould) {
   // A flat wall in front of the sensor: every scored point is in the plane interval, none in the edge one.
   PointCloud wall;
   for (int c = -200; c <= 200; ++c) {
-    const double beta = (c + 0.5) * 0.2 * kDeg;  // bin centres
+    const double beta = (c + 0.5) * 0.2 * kDegree;  // bin centres
     wall.points.push_back(Vector3f(static_cast<float>(5.0 * std::tan(beta)), 5.0f, 0.0f));
     wall.rings.push_back(0);
   }

@@ -33,7 +33,7 @@ constexpr int kNumStarts = 20;
 constexpr double kDeg = M_PI / 180.0;
 
 /// (translation error [m], rotation error [rad]) of a against b.
-std::pair<double, double> pose_error(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+std::pair<double, double> pose_error_of(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
   const Eigen::Isometry3d d = b.inverse() * a;
   return {d.translation().norm(), Eigen::AngleAxisd(d.linear()).angle()};
 }
@@ -150,7 +150,7 @@ TEST(LocalizeRealTest, RoomScansFromRandomStarts) {
   IcpResult ref_p2p = align_icp(source, target, guess, is);
   is.max_correspondence_distance = 0.1;
   ref_p2p = align_icp(source, target, ref_p2p.T_target_source, is);
-  const auto agree = pose_error(ref.T_target_source, ref_p2p.T_target_source);
+  const auto agree = pose_error_of(ref.T_target_source, ref_p2p.T_target_source);
   ASSERT_LT(agree.first, 0.02);
   ASSERT_LT(agree.second, 0.2 * kDeg);
   const Eigen::Isometry3d T_ref = ref.T_target_source;
@@ -169,7 +169,7 @@ TEST(LocalizeRealTest, RoomScansFromRandomStarts) {
     lk.sac_ia.seed = 100 + static_cast<std::uint64_t>(k);
     const LocalizeResult r = localize_coarse_to_fine(moved, prepared, lk);
     const Eigen::Isometry3d expected = T_ref * T_rand.inverse();
-    const auto e = pose_error(r.T_target_source, expected);
+    const auto e = pose_error_of(r.T_target_source, expected);
     EXPECT_LT(e.first, 0.05) << "start " << k;
     EXPECT_LT(e.second, 0.5 * kDeg) << "start " << k;
     EXPECT_EQ(r.status, Status::kOk) << "start " << k;
@@ -210,7 +210,7 @@ TEST(IcpRealTest, Hdl32PairMatchesReference) {
   is.max_correspondence_distance = 0.1;
   is.min_overlap = 0.0;
   const IcpResult r = align_icp(source, target, tree, gated.T_target_source, is);
-  const auto e = pose_error(r.T_target_source, T_ref);
+  const auto e = pose_error_of(r.T_target_source, T_ref);
   EXPECT_LT(e.first, 0.05);
   EXPECT_LT(e.second, 0.3 * kDeg);
   EXPECT_GT(gated.degeneracy, 0.0);

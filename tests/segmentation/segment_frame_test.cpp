@@ -18,7 +18,7 @@
 namespace plumb {
 namespace {
 
-constexpr double kDeg = kPi / 180.0;
+constexpr double kDegree = kPi / 180.0;
 
 double angle_to_z(const Vector3d& n) { return std::acos(std::min(1.0, std::abs(n.normalized().z()))); }
 
@@ -108,7 +108,7 @@ TEST(SegmentFrameTest, SyntheticRoomGroundAndWallRecall) {
     const SegmentResult r = segment_frame(room.cloud, s);
     ASSERT_EQ(r.status, Status::kOk) << "height " << height;
     ASSERT_EQ(r.labels.size(), room.cloud.size());
-    EXPECT_LT(angle_to_z(r.ground.plane.normal), 0.5 * kDeg);
+    EXPECT_LT(angle_to_z(r.ground.plane.normal), 0.5 * kDegree);
     EXPECT_NEAR(r.ground.plane.offset, -1.2, 0.01);  // normal up, D = -height
     const Recall rec = recall_of(room, r);
     EXPECT_GE(rec.ground, 0.98);
@@ -219,7 +219,7 @@ TEST(SegmentFrameTest, RoomScanGroundIsTheFloorNotTheCeiling) {
     s.ground.sensor_height = height;
     const SegmentResult r = segment_frame(cloud, s);
     ASSERT_EQ(r.status, Status::kOk);
-    EXPECT_LT(angle_to_z(r.ground.plane.normal), 3 * kDeg);
+    EXPECT_LT(angle_to_z(r.ground.plane.normal), 3 * kDegree);
     EXPECT_GT(r.ground.plane.normal.z(), 0.0);
     EXPECT_NEAR(r.ground.plane.offset, -1.3, 0.1);
     EXPECT_LT(fraction_below(cloud, r.ground.plane, 0.1), 0.005);  // nothing much below the floor
@@ -228,7 +228,9 @@ TEST(SegmentFrameTest, RoomScanGroundIsTheFloorNotTheCeiling) {
     std::size_t high_ground = 0;
     for (std::size_t i : r.ground.inliers) high_ground += cloud.points[i].z() > 0.0f ? 1 : 0;
     EXPECT_EQ(high_ground, 0u);
-    for (const VerticalPlane& vp : r.vertical.planes) EXPECT_LT(std::abs(vp.plane.normal.z()), std::sin(10 * kDeg) + 1e-6);
+    for (const VerticalPlane& vp : r.vertical.planes) {
+      EXPECT_LT(std::abs(vp.plane.normal.z()), std::sin(10 * kDegree) + 1e-6);
+    }
   }
 }
 
@@ -243,7 +245,7 @@ TEST(SegmentFrameTest, Office1FloorInCameraFrameTurnedUp) {
   transform_in_place(cloud, T_up_camera);
   SegmentSettings s;
   s.sample.voxel_size = 0.1;              // a 4 m RGB-D view, not a LiDAR sweep
-  s.ground.max_normal_angle = 25 * kDeg;  // hand-held camera: pitch unknown
+  s.ground.max_normal_angle = 25 * kDegree;  // hand-held camera: pitch unknown
   const SegmentResult r = segment_frame(cloud, s);
   ASSERT_EQ(r.status, Status::kOk);
   EXPECT_LT(fraction_below(cloud, r.ground.plane, 0.1), 0.01);
@@ -256,7 +258,7 @@ TEST(SegmentFrameTest, Hdl32FrameHasGroundBelowAndWalls) {
   const PointCloud cloud = io::read_cloud(path);
   const SegmentResult r = segment_frame(cloud);
   ASSERT_EQ(r.status, Status::kOk);
-  EXPECT_LT(angle_to_z(r.ground.plane.normal), 15 * kDeg);
+  EXPECT_LT(angle_to_z(r.ground.plane.normal), 15 * kDegree);
   EXPECT_LT(r.ground.plane.offset, -1.0);
   EXPECT_LT(fraction_below(cloud, r.ground.plane, 0.2), 0.01);
   EXPECT_GE(r.vertical.planes.size(), 2u);
@@ -301,7 +303,7 @@ TEST(SegmentFrameTest, IsprsSample11TypeIIError) {
   s.sample.normal_radius = 5.0f;
   s.ground.distance_threshold = 0.5;
   s.ground.height_tolerance = 3.0;
-  s.ground.max_normal_angle = 20 * kDeg;
+  s.ground.max_normal_angle = 20 * kDegree;
   const SegmentResult r = segment_frame(cloud, s);
   ASSERT_EQ(r.status, Status::kOk);
   std::size_t type2 = 0;

@@ -22,7 +22,7 @@ using Tri = std::array<std::uint32_t, 3>;
 
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 /// Closed axis-aligned box: 8 corners, 12 triangles; element = face index (0..5: -x +x -y +y -z +z).
 void box_mesh(const Vector3d& lo, const Vector3d& hi, std::vector<Vector3d>& v, std::vector<Tri>& t,
@@ -44,7 +44,7 @@ void box_mesh(const Vector3d& lo, const Vector3d& hi, std::vector<Vector3d>& v, 
 
 /// Exit distance of a ray from inside an axis-aligned box, and the face index it leaves through.
 double box_exit(const Vector3d& lo, const Vector3d& hi, const Vector3d& o, const Vector3d& d, int* face) {
-  double best = kInf;
+  double best = kInfinity;
   for (int k = 0; k < 3; ++k) {
     if (d[k] == 0.0) continue;
     const double t = ((d[k] > 0.0 ? hi[k] : lo[k]) - o[k]) / d[k];
@@ -67,7 +67,7 @@ Vector3d random_unit(Rng& rng) {
 /// Independent oracle: Moeller-Trumbore over every triangle (double).
 double brute_force_range(const std::vector<Vector3d>& v, const std::vector<Tri>& tris, const Vector3d& o,
                          const Vector3d& d) {
-  double best = kInf;
+  double best = kInfinity;
   for (const Tri& t : tris) {
     const Vector3d e1 = v[t[1]] - v[t[0]], e2 = v[t[2]] - v[t[0]];
     const Vector3d p = d.cross(e2);
@@ -204,7 +204,7 @@ TEST(RayCasterTest, MatchesBruteForceOnFzkHaus) {
       const Vector3d d = random_unit(rng);
       const double expected = brute_force_range(mesh.vertices, mesh.triangles, o, d);
       const RayHit h = caster.cast(o, d);
-      ASSERT_EQ(h.hit(), expected < kInf) << "ray " << i << " leaf " << s.leaf_size;
+      ASSERT_EQ(h.hit(), expected < kInfinity) << "ray " << i << " leaf " << s.leaf_size;
       if (!h.hit()) continue;
       ++hits;
       EXPECT_NEAR(h.range, expected, 1e-7) << "ray " << i;
@@ -279,8 +279,8 @@ TEST(RayCasterTest, ConcurrentCastsAgree) {
   // And agree with the oracle.
   for (std::size_t i = 0; i < 200; ++i) {
     const double expected = brute_force_range(v, t, Vector3d::Zero(), dirs[i]);
-    if (expected == kInf) {
-      EXPECT_EQ(serial[i], kInf);
+    if (expected == kInfinity) {
+      EXPECT_EQ(serial[i], kInfinity);
     } else {
       EXPECT_NEAR(serial[i], expected, 1e-9);
     }
@@ -296,7 +296,7 @@ TEST(RayCasterTest, BadInput) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   EXPECT_FALSE(caster.cast(Vector3d(nan, 0, 0), Vector3d(1, 0, 0)).hit());
   EXPECT_FALSE(caster.cast(Vector3d::Zero(), Vector3d(nan, 0, 0)).hit());
-  EXPECT_FALSE(caster.cast(Vector3d::Zero(), Vector3d(kInf, 0, 0)).hit());
+  EXPECT_FALSE(caster.cast(Vector3d::Zero(), Vector3d(kInfinity, 0, 0)).hit());
   EXPECT_FALSE(caster.cast(Vector3d::Zero(), Vector3d::Zero()).hit());
   EXPECT_FALSE(caster.cast(Vector3d::Zero(), Vector3d(1, 0, 0), nan).hit());
   EXPECT_FALSE(caster.cast(Vector3d::Zero(), Vector3d(1, 0, 0), -1.0).hit());
@@ -304,7 +304,7 @@ TEST(RayCasterTest, BadInput) {
 
   const RayCaster empty({}, {}, {});
   EXPECT_FALSE(empty.cast(Vector3d::Zero(), Vector3d(1, 0, 0)).hit());
-  EXPECT_FALSE(empty.occluded(Vector3d::Zero(), Vector3d(1, 0, 0), kInf));
+  EXPECT_FALSE(empty.occluded(Vector3d::Zero(), Vector3d(1, 0, 0), kInfinity));
 
   auto bad_index = t;
   bad_index[3][1] = 8;

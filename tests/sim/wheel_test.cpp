@@ -10,12 +10,12 @@
 namespace plumb::sim {
 namespace {
 
-RobotTrajectory loop_trajectory() {
+RobotTrajectory wheel_loop_trajectory() {
   return drive_route({{0, 0}, {6, 0}, {6, 3}, {4, 3}, {3, 1.5}, {2, 3}, {0, 3}}, true, 2, 0.0, 0.0);
 }
 
 TEST(WheelTest, ZeroNoiseOdometryIntegratesToGroundTruth) {
-  const RobotTrajectory traj = loop_trajectory();
+  const RobotTrajectory traj = wheel_loop_trajectory();
   WheelSettings s;
   s.radius_error_left = s.radius_error_right = s.axle_error = s.slip_sigma = 0.0;
   const auto wheels = simulate_wheels(traj, s);
@@ -54,7 +54,7 @@ TEST(WheelTest, RadiusErrorScalesTheOdometry) {
 }
 
 TEST(WheelTest, DefaultErrorsAndSlipDriftButStayPlausible) {
-  const RobotTrajectory traj = loop_trajectory();
+  const RobotTrajectory traj = wheel_loop_trajectory();
   const WheelSettings s;
   const auto wheels = simulate_wheels(traj, s);
   const auto odom = integrate_wheel_odometry(wheels, s.radius, s.radius, s.axle, traj.states.front().pose);

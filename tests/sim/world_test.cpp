@@ -21,7 +21,7 @@ using namespace plumb::sim;
 
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kFar = std::numeric_limits<double>::infinity();
 
 /// Append a closed axis-aligned box as a new element of `type`.
 int add_box(BimMesh& m, const Vector3d& lo, const Vector3d& hi, const std::string& type) {
@@ -112,7 +112,7 @@ TEST(WorldTest, LabelsOnASyntheticBuilding) {
       {Vector3d(3.0, 3.0, 0).normalized(), std::sqrt(18.0), b.column, kSimOtherElement},
   };
   for (const Case& c : cases) {
-    const RayHit h = world.cast(o, c.dir, kInf, 0.0);
+    const RayHit h = world.cast(o, c.dir, kFar, 0.0);
     ASSERT_TRUE(h.hit());
     EXPECT_NEAR(h.range, c.range, 1e-12);
     EXPECT_EQ(h.element, c.element);
@@ -121,11 +121,11 @@ TEST(WorldTest, LabelsOnASyntheticBuilding) {
   }
   EXPECT_EQ(world.label_of(RayHit{}), kSimOther);
   // The top of the ceiling slab seen from above is ground (a floor of the storey above).
-  const RayHit roof = world.cast(Vector3d(5, 4, 10), Vector3d(0, 0, -1), kInf, 0.0);
+  const RayHit roof = world.cast(Vector3d(5, 4, 10), Vector3d(0, 0, -1), kFar, 0.0);
   EXPECT_NEAR(roof.range, 6.8, 1e-12);
   EXPECT_EQ(world.label_of(roof), kSimGround);
   // The side of a slab is not ground.
-  const RayHit side = world.cast(Vector3d(12, 4, -0.1), Vector3d(-1, 0, 0), kInf, 0.0);
+  const RayHit side = world.cast(Vector3d(12, 4, -0.1), Vector3d(-1, 0, 0), kFar, 0.0);
   EXPECT_EQ(side.element, b.floor);
   EXPECT_EQ(world.label_of(side), kSimOtherElement);
   EXPECT_EQ(sim_class_of_type("IFCWALLSTANDARDCASE"), kSimWall);
@@ -140,16 +140,16 @@ TEST(WorldTest, WindowsTransmitAndDoorsStandOpen) {
   const int shed_east = add_box(b.mesh, Vector3d(15.0, 0.0, 0.0), Vector3d(16.0, 8.0, 3.0), "IfcBuildingElementProxy");
   const int shed_west = add_box(b.mesh, Vector3d(-6.0, 0.0, 0.0), Vector3d(-5.0, 8.0, 3.0), "IfcBuildingElementProxy");
   const World world(b.mesh, exact_settings());
-  const RayHit through_window = world.cast(Vector3d(5, 4, 1.5), Vector3d(1, 0, 0), kInf, 0.0);
+  const RayHit through_window = world.cast(Vector3d(5, 4, 1.5), Vector3d(1, 0, 0), kFar, 0.0);
   ASSERT_TRUE(through_window.hit());
   EXPECT_EQ(through_window.element, shed_east);
   EXPECT_NEAR(through_window.range, 10.0, 1e-12);
-  const RayHit through_door = world.cast(Vector3d(5, 4, 1.0), Vector3d(-1, 0, 0), kInf, 0.0);
+  const RayHit through_door = world.cast(Vector3d(5, 4, 1.0), Vector3d(-1, 0, 0), kFar, 0.0);
   ASSERT_TRUE(through_door.hit());
   EXPECT_EQ(through_door.element, shed_west);
   EXPECT_NEAR(through_door.range, 10.0, 1e-12);
   // Beside the window: the wall.
-  const RayHit wall = world.cast(Vector3d(5, 4, 0.5), Vector3d(1, 0, 0), kInf, 0.0);
+  const RayHit wall = world.cast(Vector3d(5, 4, 0.5), Vector3d(1, 0, 0), kFar, 0.0);
   EXPECT_NEAR(wall.range, 5.0, 1e-12);
   EXPECT_EQ(world.label_of(wall), kSimWall);
   // The nominal model still has its window and door.
@@ -172,8 +172,8 @@ TEST(WorldTest, AsBuiltDeviationsMoveEachElementRigidly) {
     const Vector3d o(rng.uniform(1, 9), rng.uniform(1, 7), rng.uniform(0.5, 2.5));
     Vector3d d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
     d.normalize();
-    const RayHit h = world.cast(o, d, kInf, 0.0);
-    const RayHit h0 = nominal.cast(o, d, kInf, 0.0);
+    const RayHit h = world.cast(o, d, kFar, 0.0);
+    const RayHit h0 = nominal.cast(o, d, kFar, 0.0);
     if (!h.hit() || !h0.hit() || h.element != h0.element) continue;
     ++checked;
     // The as-built hit, taken back through its element's deviation, lies on the nominal surface:
@@ -217,7 +217,7 @@ TEST(WorldTest, ClutterStandsOnTheFloorAgainstWallsAndIsLabelled) {
     // On the floor (z = 0, within the as-built deviation) and inside the room.
     EXPECT_NEAR(box.center.z() - box.half_size.z(), 0.0, 0.05);
     const Eigen::Matrix3d R = Eigen::AngleAxisd(box.yaw, Vector3d::UnitZ()).toRotationMatrix();
-    double min_wall_gap = kInf;
+    double min_wall_gap = kFar;
     for (int i = 0; i < 4; ++i) {
       const Vector3d corner = box.center + R * Vector3d((i & 1) ? box.half_size.x() : -box.half_size.x(),
                                                         (i & 2) ? box.half_size.y() : -box.half_size.y(), 0);
@@ -231,7 +231,7 @@ TEST(WorldTest, ClutterStandsOnTheFloorAgainstWallsAndIsLabelled) {
     // Not in front of the door (x = 0, y 3.5..4.5).
     EXPECT_FALSE(box.center.x() < 1.5 && box.center.y() > 2.5 && box.center.y() < 5.5);
     // A ray from above at its centre meets the box top, labelled clutter.
-    const RayHit h = world.cast(box.center + Vector3d(0, 0, box.half_size.z() + 0.3), Vector3d(0, 0, -1), kInf, 0.0);
+    const RayHit h = world.cast(box.center + Vector3d(0, 0, box.half_size.z() + 0.3), Vector3d(0, 0, -1), kFar, 0.0);
     ASSERT_TRUE(h.hit());
     if (h.triangle < num_bim + 12 * world.clutter().size()) {  // (else a person passes there)
       EXPECT_NEAR(h.range, 0.3, 1e-9);
@@ -273,14 +273,14 @@ TEST(WorldTest, PeopleWalkAndAreHitWhereTheyStand) {
       // From 0.3 m beside them at chest height, perpendicular to the walk; and from above the head.
       const Vector3d walk = (person.b - person.a).normalized();
       const Vector3d side(-walk.y(), walk.x(), 0.0);
-      const RayHit h = world.cast(f + Vector3d(0, 0, 1.2) + side * (person.radius + 0.3), -side, kInf, t);
+      const RayHit h = world.cast(f + Vector3d(0, 0, 1.2) + side * (person.radius + 0.3), -side, kFar, t);
       ASSERT_TRUE(h.hit());
       EXPECT_NEAR(h.range, 0.3, 1e-9);
       EXPECT_EQ(h.element, -1);
       EXPECT_EQ(h.triangle, num_bim + p);
       EXPECT_EQ(world.label_of(h), kSimClutter);
       EXPECT_GT(h.normal.dot(side), 0.999);
-      const RayHit top = world.cast(f + Vector3d(0, 0, 2.5), -Vector3d::UnitZ(), kInf, t);
+      const RayHit top = world.cast(f + Vector3d(0, 0, 2.5), -Vector3d::UnitZ(), kFar, t);
       EXPECT_NEAR(top.range, 2.5 - person.height, 1e-9);
       EXPECT_EQ(top.triangle, num_bim + p);
       // A ray that passes 1 cm beside them does not hit them.
@@ -311,7 +311,7 @@ TEST(WorldTest, DeterministicForASeed) {
   for (int i = 0; i < 300; ++i) {
     const Vector3d o(rng.uniform(1, 9), rng.uniform(1, 7), rng.uniform(0.5, 2.5));
     const Vector3d d = Vector3d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)).normalized();
-    const RayHit h1 = w1.cast(o, d, kInf, 1.0), h2 = w2.cast(o, d, kInf, 1.0), h3 = w3.cast(o, d, kInf, 1.0);
+    const RayHit h1 = w1.cast(o, d, kFar, 1.0), h2 = w2.cast(o, d, kFar, 1.0), h3 = w3.cast(o, d, kFar, 1.0);
     EXPECT_EQ(h1.range, h2.range);
     EXPECT_EQ(h1.triangle, h2.triangle);
     if (h1.range != h3.range) ++differ;
@@ -338,7 +338,7 @@ TEST(WorldTest, BadSettingsThrow) {
   EXPECT_THROW(World(broken, WorldSettings{}), plumb::Error);
   // An empty model is a world where every ray misses.
   const World empty(BimMesh{}, WorldSettings{});
-  EXPECT_FALSE(empty.cast(Vector3d::Zero(), Vector3d::UnitX(), kInf, 0.0).hit());
+  EXPECT_FALSE(empty.cast(Vector3d::Zero(), Vector3d::UnitX(), kFar, 0.0).hit());
   EXPECT_TRUE(empty.clutter().empty());
 }
 
