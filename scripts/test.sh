@@ -68,9 +68,10 @@ step "ASan + UBSan build (-Werror): library, CLI, every test"
 # second (release) build and run of the same tests took a third of CI's time on two cores.
 # -O1 without -g: sanitizers need no debug info to name the failing function, and Eigen-heavy
 # sources compile several times faster; NDEBUG stays undefined so Eigen's own asserts run too.
+# PLUMB_UNITY_TESTS: each test binary's files compiled as one unit (gtest and Eigen parsed once).
 cmake -S . -B build/asan "${launcher[@]}" -DCMAKE_BUILD_TYPE=None -DCMAKE_CXX_FLAGS="-O1" -DPLUMB_SANITIZE=ON -DPLUMB_WERROR=ON \
       -DPLUMB_DATA_DIR="$data_dir" -DPLUMB_BUILD_TESTS=ON -DPLUMB_BUILD_BENCH=OFF \
-      -DPLUMB_BUILD_EXAMPLES=ON >/dev/null
+      -DPLUMB_BUILD_EXAMPLES=ON -DPLUMB_UNITY_TESTS=ON >/dev/null
 cmake --build build/asan -j"$jobs"
 
 if [ "$fuzz_seconds" -gt 0 ]; then
