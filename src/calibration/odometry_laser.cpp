@@ -9,7 +9,8 @@
 #include <Eigen/LU>
 
 #include "plumb/core/error.hpp"
-#include "plumb/core/impl/eigen_instantiations.hpp"
+
+#include "core/eigen_instantiations.hpp"
 
 namespace plumb {
 namespace {

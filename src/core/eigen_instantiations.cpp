@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The one instantiation of each Eigen decomposition declared extern in
-// plumb/core/impl/eigen_instantiations.hpp (compiled whether or not the build uses the externs).
+// src/core/eigen_instantiations.hpp (compiled whether or not the build uses the externs).
 #define PLUMB_EIGEN_INSTANTIATIONS_DEFINE
-#include "plumb/core/impl/eigen_instantiations.hpp"
+#include "core/eigen_instantiations.hpp"
 
 // Instantiating whole classes compiles members no plumb code calls; GCC 12 -O3 then reports a false
 // maybe-uninitialized inside Eigen's own code (ConditionEstimator). Not plumb's code to fix.

@@ -7,7 +7,8 @@
 #include <Eigen/Cholesky>
 
 #include "plumb/core/error.hpp"
-#include "plumb/core/impl/eigen_instantiations.hpp"
+
+#include "core/eigen_instantiations.hpp"
 
 namespace plumb {
 

@@ -10,7 +10,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "plumb/core/error.hpp"
-#include "plumb/core/impl/eigen_instantiations.hpp"
+#include "core/eigen_instantiations.hpp"
 #include "plumb/core/robust_kernel.hpp"
 
 namespace plumb {

@@ -6,8 +6,9 @@
 #include <Eigen/Eigenvalues>
 
 #include "plumb/core/error.hpp"
-#include "plumb/core/impl/eigen_instantiations.hpp"
 #include "plumb/core/lie.hpp"
+
+#include "core/eigen_instantiations.hpp"
 
 namespace plumb {
 namespace {

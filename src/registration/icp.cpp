@@ -12,11 +12,13 @@
 #include <Eigen/Eigenvalues>
 
 #include "plumb/core/error.hpp"
-#include "plumb/core/impl/eigen_instantiations.hpp"
 #include "plumb/core/lie.hpp"
 #include "plumb/registration/horn.hpp"
 #include "plumb/registration/overlap.hpp"
 #include "plumb/search/neighbors.hpp"
+
+#include "core/eigen_instantiations.hpp"
+#include "registration/icp_detail.hpp"
 
 namespace plumb {
 

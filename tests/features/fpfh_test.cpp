@@ -14,6 +14,8 @@
 #include "plumb/io/pcd.hpp"
 #include "test_data.hpp"
 
+#include "features/fpfh_detail.hpp"
+
 namespace plumb {
 namespace {
 

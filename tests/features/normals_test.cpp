@@ -18,6 +18,8 @@
 #include "plumb/io/pcd.hpp"
 #include "test_data.hpp"
 
+#include "features/normals_detail.hpp"
+
 namespace plumb {
 namespace {
 

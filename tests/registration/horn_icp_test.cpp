@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 
 #include "plumb/core/error.hpp"
@@ -14,6 +15,8 @@
 #include "plumb/registration/horn.hpp"
 #include "plumb/registration/icp.hpp"
 #include "plumb/registration/overlap.hpp"
+
+#include "registration/icp_detail.hpp"
 
 namespace plumb {
 namespace {

@@ -23,6 +23,10 @@
 #include "plumb/segmentation/vertical_planes.hpp"
 #include "test_data.hpp"
 
+#include "features/normals_detail.hpp"
+#include "segmentation/frame_sample_detail.hpp"
+#include "segmentation/plane_ransac_detail.hpp"
+
 namespace plumb {
 namespace {
 

@@ -75,5 +75,3 @@ FpfhResult compute_fpfh(const PointCloud& cloud, const FpfhSettings& settings = 
                         const std::vector<std::size_t>* indices = nullptr);
 
 }  // namespace plumb
-
-#include "plumb/features/impl/fpfh_impl.hpp"

@@ -56,8 +56,3 @@ NormalResult estimate_normals(const std::vector<Vector3f>& cloud, const KdTree<3
 std::size_t compute_normals(PointCloud& cloud, const NormalSettings& settings = {});
 
 }  // namespace plumb
-
-#include "plumb/features/impl/normals_impl.hpp"
-
-// Within plumb's build tree the Eigen decompositions above are compiled once, in plumb_core.
-#include "plumb/core/impl/eigen_instantiations.hpp"

@@ -89,5 +89,3 @@ VoxelKeyLayout make_voxel_key_layout(const Vector3d& min, const Vector3d& max, d
 }  // namespace detail
 
 }  // namespace plumb
-
-#include "plumb/filters/impl/voxel_grid_impl.hpp"

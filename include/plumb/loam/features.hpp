@@ -89,7 +89,7 @@ struct LoamFeatures {
 
 /// @brief cos(theta_i) of Zhou et al. 2021, eq. 5, from the three points (law of cosines on the distances).
 /// @return the cosine in [-1, 1], or NaN when two of the points coincide
-inline double loam_cosine(const Vector3d& prev, const Vector3d& point, const Vector3d& next);
+double loam_cosine(const Vector3d& prev, const Vector3d& point, const Vector3d& next);
 
 /// @brief Score every point of every ring with eq. 5, drop occluded and parallel-beam points,
 ///        count the cos intervals and select edge / plane points per ring and sector.
@@ -97,14 +97,12 @@ inline double loam_cosine(const Vector3d& prev, const Vector3d& point, const Vec
 /// @param image build_range_image(cloud, ...)
 /// @throws plumb::Error on misuse: an image not built from this cloud, bad settings
 /// @note O(n log n); deterministic (ties by column); no shared state.
-inline LoamFeatures extract_loam_features(const PointCloud& cloud, const RangeImage& image,
-                                          const LoamFeatureSettings& settings = {});
+LoamFeatures extract_loam_features(const PointCloud& cloud, const RangeImage& image,
+                                   const LoamFeatureSettings& settings = {});
 
 /// @brief build_range_image() then extract_loam_features().
-inline LoamFeatures extract_loam_features(const PointCloud& cloud,
-                                          const RangeImageSettings& image_settings,
-                                          const LoamFeatureSettings& settings = {});
+LoamFeatures extract_loam_features(const PointCloud& cloud,
+                                   const RangeImageSettings& image_settings,
+                                   const LoamFeatureSettings& settings = {});
 
 }  // namespace plumb
-
-#include "plumb/loam/impl/features_impl.hpp"

@@ -53,9 +53,7 @@ struct RingGroundResult {
 ///         is not used when steeper than max_slope_deg or not below the sensor.
 /// @throws plumb::Error when the image does not belong to the cloud or the settings are out of range
 /// @note O(n); deterministic; no shared state.
-inline RingGroundResult classify_ground(const PointCloud& cloud, const RangeImage& image,
-                                        const Eigen::Matrix3d& R_level, const RingGroundSettings& settings = {});
+RingGroundResult classify_ground(const PointCloud& cloud, const RangeImage& image,
+                                 const Eigen::Matrix3d& R_level, const RingGroundSettings& settings = {});
 
 }  // namespace plumb
-
-#include "plumb/loam/impl/ground_impl.hpp"

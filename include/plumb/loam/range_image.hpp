@@ -87,14 +87,12 @@ struct RangeImage {
 /// @throws plumb::Error on misuse: inconsistent cloud fields, RingSource::kField without a ring
 ///         field or with a ring >= num_rings, kVerticalAngles without angles, bad settings
 /// @note O(n) (O(n log n) with auto-binning); deterministic; no shared state.
-inline RangeImage build_range_image(const PointCloud& cloud, const RangeImageSettings& settings = {});
+RangeImage build_range_image(const PointCloud& cloud, const RangeImageSettings& settings = {});
 
 /// @brief The row of each point by auto-binning its elevation angle (see RingSource::kAutoBin).
 /// @param num_rows receives the number of rings found
 /// @return per point: its row, or RangeImage::kNoRing for invalid or stray points
-inline std::vector<std::uint16_t> auto_bin_rings(const PointCloud& cloud, const RangeImageSettings& settings,
-                                                 int& num_rows);
+std::vector<std::uint16_t> auto_bin_rings(const PointCloud& cloud, const RangeImageSettings& settings,
+                                          int& num_rows);
 
 }  // namespace plumb
-
-#include "plumb/loam/impl/range_image_impl.hpp"

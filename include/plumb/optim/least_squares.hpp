@@ -179,6 +179,3 @@ LeastSquaresResult solve_least_squares(LeastSquaresProblem& problem, const Least
 }  // namespace plumb
 
 #include "plumb/optim/impl/least_squares_impl.hpp"
-
-// Within plumb's build tree the Eigen decompositions above are compiled once, in plumb_core.
-#include "plumb/core/impl/eigen_instantiations.hpp"

@@ -316,6 +316,3 @@ extern template std::vector<std::uint32_t> feature_knn<33>(const std::vector<std
                                                            const std::vector<std::size_t>&, std::size_t);
 }  // namespace plumb
 #endif
-
-// Within plumb's build tree the Eigen decompositions above are compiled once, in plumb_core.
-#include "plumb/core/impl/eigen_instantiations.hpp"

@@ -109,5 +109,3 @@ IcpResult align_icp(const PointCloud& source, const PointCloud& target,
                     const Eigen::Isometry3d& T_init, const IcpSettings& settings = {});
 
 }  // namespace plumb
-
-#include "plumb/registration/impl/icp_impl.hpp"

@@ -161,5 +161,3 @@ LocalizeResult localize_coarse_to_fine(const PointCloud& source, const PointClou
                                        const LocalizeSettings& settings = {});
 
 }  // namespace plumb
-
-#include "plumb/registration/impl/localize_impl.hpp"

@@ -110,5 +110,3 @@ SacIaResult align_sac_ia(const PointCloud& source, const std::vector<FpfhSignatu
                          const KdTree3f& target_tree, const SacIaSettings& settings = {});
 
 }  // namespace plumb
-
-#include "plumb/registration/impl/sac_ia_impl.hpp"

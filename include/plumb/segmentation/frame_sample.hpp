@@ -85,5 +85,3 @@ struct FrameSample {
 FrameSample sample_frame(const PointCloud& cloud, const FrameSampleSettings& settings = {});
 
 }  // namespace plumb
-
-#include "plumb/segmentation/impl/frame_sample_impl.hpp"

@@ -71,5 +71,3 @@ GroundResult extract_ground(const PointCloud& cloud, const FrameSample& sample,
 GroundResult extract_ground(const PointCloud& cloud, const GroundSettings& settings = {});
 
 }  // namespace plumb
-
-#include "plumb/segmentation/impl/ground_impl.hpp"

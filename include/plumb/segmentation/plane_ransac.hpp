@@ -102,8 +102,3 @@ bool fit_plane_least_squares(const std::vector<Vector3f>& points, const std::vec
                              Plane& plane, double* rmse = nullptr);
 
 }  // namespace plumb
-
-#include "plumb/segmentation/impl/plane_ransac_impl.hpp"
-
-// Within plumb's build tree the Eigen decompositions above are compiled once, in plumb_core.
-#include "plumb/core/impl/eigen_instantiations.hpp"

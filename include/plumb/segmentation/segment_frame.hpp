@@ -5,7 +5,6 @@
 /// @brief One call per LiDAR frame: ground, vertical-plane key points and "decoration"
 ///        (Liu et al. 2022, sec. 2.2): segment_frame().
 
-#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -67,33 +66,6 @@ struct SegmentResult {
 /// @note Deterministic for given settings (seeds inside). One thread. Cost is dominated by the
 ///       normals of the sample: O(m k log m) for m sample points, plus O(n) per plane for the n
 ///       input points.
-inline SegmentResult segment_frame(const PointCloud& cloud, const SegmentSettings& settings = {}) {
-  const auto t0 = std::chrono::steady_clock::now();
-  detail::check_ground_settings(settings.ground);
-  SegmentResult out;
-  const FrameSample sample = sample_frame(cloud, settings.sample);
-  out.num_sample = sample.points.size();
-  out.timings.sample = sample.seconds;
-  out.ground = extract_ground(cloud, sample, settings.ground);
-  out.timings.ground = out.ground.seconds;
-  out.vertical = extract_vertical_planes(cloud, sample, &out.ground, settings.vertical);
-  out.timings.vertical = out.vertical.seconds;
-
-  // Vertical labels first (one vectorizable pass), then ground (ground inliers are never vertical).
-  const std::size_t n = cloud.points.size();
-  out.labels.resize(n);
-  const std::int32_t* plane_of = out.vertical.plane_of_point.data();
-  std::int32_t* labels = out.labels.data();
-  for (std::size_t i = 0; i < n; ++i) labels[i] = plane_of[i] >= 0 ? kSegmentVertical : kSegmentOther;
-  out.num_vertical = out.vertical.num_points;
-  if (out.ground.status == Status::kOk) {
-    for (std::size_t i : out.ground.inliers) labels[i] = kSegmentGround;
-    out.num_ground = out.ground.inliers.size();
-  }
-  out.num_other = n - out.num_ground - out.num_vertical;
-  out.status = out.ground.status;
-  out.timings.total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return out;
-}
+SegmentResult segment_frame(const PointCloud& cloud, const SegmentSettings& settings = {});
 
 }  // namespace plumb

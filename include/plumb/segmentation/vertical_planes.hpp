@@ -75,5 +75,3 @@ VerticalPlanesResult extract_vertical_planes(const PointCloud& cloud, const Fram
                                              const VerticalPlaneSettings& settings = {});
 
 }  // namespace plumb
-
-#include "plumb/segmentation/impl/vertical_planes_impl.hpp"

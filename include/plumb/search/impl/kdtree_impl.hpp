@@ -1,21 +1,17 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
-// Template bodies of plumb/search/kdtree.hpp; include that header, not this one.
+// Template bodies of plumb/search/kdtree.hpp; include that header, not this one. The non-template
+// helpers they call are compiled in src/search/kdtree.cpp.
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <cstring>
 #include <limits>
 #include <memory>
 #include <utility>
 #include <vector>
-
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 
 #include "plumb/search/kdtree.hpp"
 
@@ -27,15 +23,7 @@ namespace detail {
 
 /// The next float above a non-negative v (v itself when infinite): turns "d <= v" into the
 /// collectors' strict "d < bound".
-inline float next_float_up(float v) {
-  if (!(v < std::numeric_limits<float>::infinity())) return v;
-  if (v == 0.0f) return std::numeric_limits<float>::denorm_min();  // also for -0 (sign bit set)
-  std::uint32_t bits;
-  std::memcpy(&bits, &v, sizeof bits);
-  ++bits;
-  std::memcpy(&v, &bits, sizeof bits);
-  return v;
-}
+float next_float_up(float v);
 
 }  // namespace detail
 
@@ -143,43 +131,7 @@ KdTree<Dim>::KdTree(const std::vector<Point>& points, const KdTreeSettings& sett
 namespace detail {
 
 /// Tight [lo, hi] and the sum of x[0..count); four independent lanes so the loop pipelines.
-inline void min_max_sum(const float* x, std::size_t count, float& lo, float& hi, float& sum) {
-  float l[4] = {lo, lo, lo, lo};
-  float h[4] = {hi, hi, hi, hi};
-  float s[4] = {0.0f, 0.0f, 0.0f, 0.0f};
-  std::size_t i = 0;
-#if defined(__SSE2__)
-  // The same four lanes in one register each: minps(x, l) is x < l ? x : l, as below.
-  __m128 vl = _mm_set1_ps(lo);
-  __m128 vh = _mm_set1_ps(hi);
-  __m128 vs = _mm_setzero_ps();
-  for (; i + 4 <= count; i += 4) {
-    const __m128 v = _mm_loadu_ps(x + i);
-    vl = _mm_min_ps(v, vl);
-    vh = _mm_max_ps(v, vh);
-    vs = _mm_add_ps(vs, v);
-  }
-  _mm_storeu_ps(l, vl);
-  _mm_storeu_ps(h, vh);
-  _mm_storeu_ps(s, vs);
-#else
-  for (; i + 4 <= count; i += 4) {
-    for (int j = 0; j < 4; ++j) {
-      l[j] = x[i + j] < l[j] ? x[i + j] : l[j];
-      h[j] = x[i + j] > h[j] ? x[i + j] : h[j];
-      s[j] += x[i + j];
-    }
-  }
-#endif
-  for (; i < count; ++i) {
-    l[0] = x[i] < l[0] ? x[i] : l[0];
-    h[0] = x[i] > h[0] ? x[i] : h[0];
-    s[0] += x[i];
-  }
-  lo = std::min(std::min(l[0], l[1]), std::min(l[2], l[3]));
-  hi = std::max(std::max(h[0], h[1]), std::max(h[2], h[3]));
-  sum = (s[0] + s[1]) + (s[2] + s[3]);
-}
+void min_max_sum(const float* x, std::size_t count, float& lo, float& hi, float& sum);
 
 /// Bounds of a node's points under construction.
 template <int Dim>

@@ -1,12 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
-// Internals of plumb/registration/icp.hpp that BimOdometry and the tests use; the bodies are in
-// src/registration/icp.cpp.
+/// @file
+/// @brief The steps of align_icp() (src/registration/icp.cpp), for plumb's own sources and tests
+///        (not installed).
 
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
+#include "plumb/registration/icp.hpp"
 #include "plumb/registration/overlap.hpp"
 
 namespace plumb {

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#pragma once
+#include "plumb/features/normals.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -9,14 +9,15 @@
 
 #include "plumb/core/error.hpp"
 
+#include "core/eigen_instantiations.hpp"
+#include "features/normals_detail.hpp"
+
 namespace plumb {
 
 namespace detail {
 
-/// Covariance of the neighbours `idx[0..n)` about their mean, accumulated in double about the
-/// first neighbour (a point of the neighbourhood, so the one-pass sums do not cancel).
-inline Eigen::Matrix3d neighbourhood_covariance(const std::vector<Vector3f>& pts,
-                                                const std::size_t* idx, std::size_t n) {
+Eigen::Matrix3d neighbourhood_covariance(const std::vector<Vector3f>& pts,
+                                         const std::size_t* idx, std::size_t n) {
   const Eigen::Vector3d origin = pts[idx[0]].cast<double>();
   double sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, sxz = 0, syy = 0, syz = 0, szz = 0;
   for (std::size_t j = 0; j < n; ++j) {
@@ -49,11 +50,7 @@ inline Eigen::Matrix3d neighbourhood_covariance(const std::vector<Vector3f>& pts
   return cov;
 }
 
-/// Normal of a neighbourhood from its covariance: the eigenvector of the smallest eigenvalue, by
-/// Eigen's closed-form 3x3 solver (trigonometric eigenvalues, eigenvectors from cross products of
-/// the shifted rows, most separated eigenvalue first). Returns false when the neighbourhood is
-/// degenerate: all points coincide, or they are collinear (two eigenvalues ~0: no unique normal).
-inline bool normal_from_covariance(const Eigen::Matrix3d& cov, Vector3f& normal, float& curvature) {
+bool normal_from_covariance(const Eigen::Matrix3d& cov, Vector3f& normal, float& curvature) {
   const double trace = cov.trace();
   if (!(trace > 0.0) || !std::isfinite(trace)) return false;
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
@@ -71,19 +68,17 @@ inline bool normal_from_covariance(const Eigen::Matrix3d& cov, Vector3f& normal,
   return normal.allFinite();
 }
 
-/// PCA of the neighbours `idx[0..n)`: unit normal (smallest eigenvector) and surface variation.
-/// Returns false when the neighbourhood is degenerate (< 3 points, coincident or collinear).
-inline bool pca_normal(const std::vector<Vector3f>& pts, const std::size_t* idx, std::size_t n,
-                       Vector3f& normal, float& curvature) {
+bool pca_normal(const std::vector<Vector3f>& pts, const std::size_t* idx, std::size_t n,
+                Vector3f& normal, float& curvature) {
   if (n < 3) return false;
   return normal_from_covariance(neighbourhood_covariance(pts, idx, n), normal, curvature);
 }
 
 }  // namespace detail
 
-inline NormalResult estimate_normals(const std::vector<Vector3f>& cloud, const KdTree<3>& tree,
-                                     const std::vector<Vector3f>& tree_points,
-                                     const NormalSettings& settings) {
+NormalResult estimate_normals(const std::vector<Vector3f>& cloud, const KdTree<3>& tree,
+                              const std::vector<Vector3f>& tree_points,
+                              const NormalSettings& settings) {
   PLUMB_CHECK(settings.k >= 3, "estimate_normals: settings.k = " << settings.k << " must be >= 3");
   PLUMB_CHECK(!(settings.radius < 0.0f) && std::isfinite(settings.radius),
               "estimate_normals: settings.radius = " << settings.radius
@@ -153,7 +148,7 @@ inline NormalResult estimate_normals(const std::vector<Vector3f>& cloud, const K
   return out;
 }
 
-inline std::size_t compute_normals(PointCloud& cloud, const NormalSettings& settings) {
+std::size_t compute_normals(PointCloud& cloud, const NormalSettings& settings) {
   PLUMB_CHECK(!cloud.empty(), "compute_normals: the cloud is empty");
   std::size_t num_finite = 0;
   for (const auto& p : cloud.points) num_finite += p.allFinite() ? 1 : 0;

@@ -1,11 +1,12 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 /// @file
-/// @brief Explicit instantiation declarations of the Eigen decompositions plumb's headers use
+/// @brief Explicit instantiation declarations of the Eigen decompositions plumb's sources use
 ///        (symmetric eigen solvers, LDLT, LLT). Each costs every including file seconds of compile
-///        time, so within plumb's own build tree (PLUMB_EIGEN_EXTERN_TEMPLATES; the installed package
-///        never sets it, since its users' Eigen may differ) they are compiled once, in plumb_core
-///        (src/core/eigen_instantiations.cpp). Only decompositions of a plain matrix are covered.
+///        time, so with PLUMB_EIGEN_EXTERN_TEMPLATES (set for plumb's own build tree) they are
+///        compiled once, in plumb_core (src/core/eigen_instantiations.cpp). A private header of
+///        src/, not installed: it names Eigen internals, which a user's Eigen may lay out otherwise.
+///        Only decompositions of a plain matrix are covered.
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>

@@ -1,7 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#pragma once
-
-// Bodies of plumb/segmentation/vertical_planes.hpp (included at its end).
+#include "plumb/segmentation/vertical_planes.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -38,8 +36,8 @@ struct VerticalPlaneLabeller {
   }
 };
 
-inline void check_vertical_plane_inputs(const PointCloud& cloud, const FrameSample& sample, const GroundResult* ground,
-                                        bool use_ground, const VerticalPlaneSettings& s) {
+void check_vertical_plane_inputs(const PointCloud& cloud, const FrameSample& sample, const GroundResult* ground,
+                                 bool use_ground, const VerticalPlaneSettings& s) {
   PLUMB_CHECK(std::isfinite(s.max_u_angle) && s.max_u_angle >= 0.0 && s.max_u_angle < 1.5707963267948966,
               "extract_vertical_planes: max_u_angle = " << s.max_u_angle << " must be in [0, pi/2)");
   PLUMB_CHECK(std::isfinite(s.distance_threshold) && s.distance_threshold > 0.0,
@@ -68,7 +66,7 @@ inline void check_vertical_plane_inputs(const PointCloud& cloud, const FrameSamp
 }
 
 /// The RANSAC of one wall among the candidates.
-inline PlaneRansacSettings vertical_plane_ransac_settings(const VerticalPlaneSettings& s) {
+PlaneRansacSettings vertical_plane_ransac_settings(const VerticalPlaneSettings& s) {
   PlaneRansacSettings rs;
   rs.distance_threshold = s.distance_threshold;
   rs.max_iterations = s.max_iterations;
@@ -84,8 +82,8 @@ inline PlaneRansacSettings vertical_plane_ransac_settings(const VerticalPlaneSet
 
 /// The wall a RANSAC fit found: its extent along the wall and in z, and the cells along it that
 /// hold sample inliers. Marks the inliers taken.
-inline VerticalPlane vertical_plane_of_fit(const PlaneRansacResult& r, const FrameSample& sample, double cell_size,
-                                           std::vector<std::uint8_t>& taken) {
+VerticalPlane vertical_plane_of_fit(const PlaneRansacResult& r, const FrameSample& sample, double cell_size,
+                                    std::vector<std::uint8_t>& taken) {
   VerticalPlane vp;
   vp.plane = r.plane;
   vp.num_sample_inliers = r.inliers.size();
@@ -116,9 +114,9 @@ inline VerticalPlane vertical_plane_of_fit(const PlaneRansacResult& r, const Fra
   return vp;
 }
 
-inline std::vector<VerticalPlaneLabeller> vertical_plane_labellers(const std::vector<VerticalPlane>& planes,
-                                                                   const FrameSample& sample,
-                                                                   const VerticalPlaneSettings& s) {
+std::vector<VerticalPlaneLabeller> vertical_plane_labellers(const std::vector<VerticalPlane>& planes,
+                                                            const FrameSample& sample,
+                                                            const VerticalPlaneSettings& s) {
   // Normals within about a neighbourhood of a floor, ceiling or corner are mixed, so sample inliers
   // stop short of the wall's true ends: widen the observed extent by one cell (and a voxel).
   const double widen = s.cell_size + sample.voxel_size;
@@ -145,9 +143,9 @@ inline std::vector<VerticalPlaneLabeller> vertical_plane_labellers(const std::ve
 }
 
 /// Full-resolution labelling: each point not on the ground goes to the first plane that contains it.
-inline void label_vertical_plane_points(const PointCloud& cloud, const GroundResult* ground, bool use_ground,
-                                        const std::vector<VerticalPlaneLabeller>& lab, float tau,
-                                        VerticalPlanesResult& out) {
+void label_vertical_plane_points(const PointCloud& cloud, const GroundResult* ground, bool use_ground,
+                                 const std::vector<VerticalPlaneLabeller>& lab, float tau,
+                                 VerticalPlanesResult& out) {
   std::vector<std::uint8_t> is_ground(cloud.points.size(), 0);
   if (use_ground) {
     for (std::size_t i : ground->inliers) is_ground[i] = 1;
@@ -199,9 +197,9 @@ inline void label_vertical_plane_points(const PointCloud& cloud, const GroundRes
 
 }  // namespace detail
 
-inline VerticalPlanesResult extract_vertical_planes(const PointCloud& cloud, const FrameSample& sample,
-                                                    const GroundResult* ground,
-                                                    const VerticalPlaneSettings& settings) {
+VerticalPlanesResult extract_vertical_planes(const PointCloud& cloud, const FrameSample& sample,
+                                             const GroundResult* ground,
+                                             const VerticalPlaneSettings& settings) {
   const auto t0 = std::chrono::steady_clock::now();
   const VerticalPlaneSettings& s = settings;
   const bool use_ground = ground != nullptr && ground->status == Status::kOk;

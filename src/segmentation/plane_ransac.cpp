@@ -1,7 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#pragma once
-
-// Bodies of plumb/segmentation/plane_ransac.hpp (included at its end).
+#include "plumb/segmentation/plane_ransac.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -12,23 +10,15 @@
 #include "plumb/core/error.hpp"
 #include "plumb/core/rng.hpp"
 
+#include "core/eigen_instantiations.hpp"
+#include "segmentation/plane_ransac_detail.hpp"
+
 namespace plumb {
 
 namespace detail {
 
-/// Candidate coordinates (and normals) gathered into contiguous float arrays, so the inlier count
-/// of a hypothesis is one vectorizable pass.
-struct PlaneCandidates {
-  std::vector<float> x, y, z, nx, ny, nz;
-  std::vector<std::size_t> index;  // into the caller's points
-  bool has_normals = false;
-};
-
-/// Number of candidates within `tau` of plane (a, b, c, d) whose normal agrees (|n_i . n| >= cos_max).
-/// Counts in blocks and gives up (returning a count <= `beat`) as soon as the remaining candidates
-/// can no longer lift the count above `beat`: most hypotheses are poor and stop early.
-inline std::size_t count_plane_inliers(const PlaneCandidates& c, float a, float b, float cc, float d, float tau,
-                                       float cos_max, std::size_t beat) {
+std::size_t count_plane_inliers(const PlaneCandidates& c, float a, float b, float cc, float d, float tau,
+                                float cos_max, std::size_t beat) {
   const std::size_t n = c.x.size();
   const float* x = c.x.data();
   const float* y = c.y.data();
@@ -59,123 +49,103 @@ inline std::size_t count_plane_inliers(const PlaneCandidates& c, float a, float 
   return count;
 }
 
-/// The candidates again, grouped by the direction of their normal about an axis, so that a
-/// hypothesis only visits the groups whose normals can agree with its own (exact pruning: the
-/// same count as count_plane_inliers()).
-///
-/// With unit vectors e1, e2, axis, a normal n = (n_a along the axis, n_p across it) and a
-/// hypothesis h: |h.n| <= |h_a| max|n_a| + |h_p| max|n_p| max|cos(phi_h - phi_n)|, where phi is the
-/// direction of the part across the axis, as a line (mod pi). Groups are bins of phi (through a
-/// monotone pseudo-angle, no trigonometry); the max of |cos| over a bin that does not contain
-/// phi_h is reached at one of its edges.
-struct NormalBins {
-  static constexpr int kBins = 32;
-  std::vector<float> x, y, z, nx, ny, nz;  // candidates ordered by bin
-  std::size_t start[kBins + 1] = {};
-  double max_along[kBins] = {};   // max |n . axis| in the bin
-  double max_across[kBins] = {};  // max |n - (n . axis) axis| in the bin
-  double edge_u[kBins + 1] = {}, edge_v[kBins + 1] = {};  // unit edge directions in (e1, e2)
-  Vector3d axis, e1, e2;
+double NormalBins::line_pseudo_angle(double u, double v) {
+  if (v < 0.0 || (v == 0.0 && u < 0.0)) {
+    u = -u;
+    v = -v;
+  }
+  const double s = std::abs(u) + v;
+  if (!(s > 0.0)) return 0.0;
+  return u >= 0.0 ? v / s : 1.0 + (-u) / s;
+}
 
-  /// Pseudo-angle in [0, 2) of the line through (u, v): monotone in its angle in [0, pi).
-  static double line_pseudo_angle(double u, double v) {
-    if (v < 0.0 || (v == 0.0 && u < 0.0)) {
-      u = -u;
-      v = -v;
-    }
-    const double s = std::abs(u) + v;
-    if (!(s > 0.0)) return 0.0;
-    return u >= 0.0 ? v / s : 1.0 + (-u) / s;
-  }
-  static int bin_of(double t) {
-    return std::min(kBins - 1, std::max(0, static_cast<int>(t * (kBins / 2.0))));
-  }
+int NormalBins::bin_of(double t) {
+  return std::min(kBins - 1, std::max(0, static_cast<int>(t * (kBins / 2.0))));
+}
 
-  void build(const PlaneCandidates& c, const Vector3d& unit_axis) {
-    axis = unit_axis;
-    e1 = axis.unitOrthogonal();
-    e2 = axis.cross(e1);
-    const std::size_t n = c.x.size();
-    std::vector<int> bin(n);
-    std::size_t count[kBins] = {};
-    for (std::size_t i = 0; i < n; ++i) {
-      const Vector3d nn(c.nx[i], c.ny[i], c.nz[i]);
-      const double u = nn.dot(e1), v = nn.dot(e2), a = nn.dot(axis);
-      const int b = bin_of(line_pseudo_angle(u, v));
-      bin[i] = b;
-      ++count[b];
-      max_along[b] = std::max(max_along[b], std::abs(a));
-      max_across[b] = std::max(max_across[b], std::sqrt(u * u + v * v));
-    }
-    start[0] = 0;
-    for (int b = 0; b < kBins; ++b) start[b + 1] = start[b] + count[b];
-    std::size_t next[kBins];
-    for (int b = 0; b < kBins; ++b) next[b] = start[b];
-    x.resize(n);
-    y.resize(n);
-    z.resize(n);
-    nx.resize(n);
-    ny.resize(n);
-    nz.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::size_t j = next[bin[i]]++;
-      x[j] = c.x[i];
-      y[j] = c.y[i];
-      z[j] = c.z[i];
-      nx[j] = c.nx[i];
-      ny[j] = c.ny[i];
-      nz[j] = c.nz[i];
-    }
-    for (int b = 0; b <= kBins; ++b) {  // the direction whose pseudo-angle is the edge's
-      const double t = 2.0 * b / kBins;
-      const double u = 1.0 - t, v = t <= 1.0 ? t : 2.0 - t;
-      const double len = std::sqrt(u * u + v * v);
-      edge_u[b] = u / len;
-      edge_v[b] = v / len;
-    }
+void NormalBins::build(const PlaneCandidates& c, const Vector3d& unit_axis) {
+  axis = unit_axis;
+  e1 = axis.unitOrthogonal();
+  e2 = axis.cross(e1);
+  const std::size_t n = c.x.size();
+  std::vector<int> bin(n);
+  std::size_t count[kBins] = {};
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vector3d nn(c.nx[i], c.ny[i], c.nz[i]);
+    const double u = nn.dot(e1), v = nn.dot(e2), a = nn.dot(axis);
+    const int b = bin_of(line_pseudo_angle(u, v));
+    bin[i] = b;
+    ++count[b];
+    max_along[b] = std::max(max_along[b], std::abs(a));
+    max_across[b] = std::max(max_across[b], std::sqrt(u * u + v * v));
   }
+  start[0] = 0;
+  for (int b = 0; b < kBins; ++b) start[b + 1] = start[b] + count[b];
+  std::size_t next[kBins];
+  for (int b = 0; b < kBins; ++b) next[b] = start[b];
+  x.resize(n);
+  y.resize(n);
+  z.resize(n);
+  nx.resize(n);
+  ny.resize(n);
+  nz.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t j = next[bin[i]]++;
+    x[j] = c.x[i];
+    y[j] = c.y[i];
+    z[j] = c.z[i];
+    nx[j] = c.nx[i];
+    ny[j] = c.ny[i];
+    nz[j] = c.nz[i];
+  }
+  for (int b = 0; b <= kBins; ++b) {  // the direction whose pseudo-angle is the edge's
+    const double t = 2.0 * b / kBins;
+    const double u = 1.0 - t, v = t <= 1.0 ? t : 2.0 - t;
+    const double len = std::sqrt(u * u + v * v);
+    edge_u[b] = u / len;
+    edge_v[b] = v / len;
+  }
+}
 
-  /// count_plane_inliers() over the bins that can hold agreeing normals.
-  std::size_t count(const Vector3d& h, float a, float b, float cc, float d, float tau, float cos_max,
-                    std::size_t beat) const {
-    const double ha = std::abs(h.dot(axis)), hu = h.dot(e1), hv = h.dot(e2);
-    const double hp = std::sqrt(hu * hu + hv * hv);
-    const int hb = bin_of(line_pseudo_angle(hu, hv));
-    const double du = hp > 0.0 ? hu / hp : 0.0, dv = hp > 0.0 ? hv / hp : 0.0;
-    // Margin for the float arithmetic of the inlier test (|error| ~1e-6).
-    const double need = static_cast<double>(cos_max) - 1e-4;
-    int visit[kBins];
-    int num_visit = 0;
-    std::size_t remaining = 0;
-    for (int k = 0; k < kBins; ++k) {
-      if (start[k + 1] == start[k]) continue;
-      const double cos_max_bin =
-          k == hb ? 1.0
-                  : std::max(std::abs(du * edge_u[k] + dv * edge_v[k]), std::abs(du * edge_u[k + 1] + dv * edge_v[k + 1]));
-      if (ha * max_along[k] + hp * max_across[k] * std::min(1.0, cos_max_bin) < need) continue;
-      visit[num_visit++] = k;
-      remaining += start[k + 1] - start[k];
-    }
-    std::size_t total = 0;
-    for (int v = 0; v < num_visit; ++v) {
-      const std::size_t begin = start[visit[v]], end = start[visit[v] + 1];
-      std::uint32_t in_bin = 0;
-      for (std::size_t i = begin; i < end; ++i) {
-        const float dist = std::abs(a * x[i] + b * y[i] + cc * z[i] - d);
-        const float agree = std::abs(a * nx[i] + b * ny[i] + cc * nz[i]);
-        in_bin += static_cast<std::uint32_t>((dist < tau) & (agree >= cos_max));
-      }
-      total += in_bin;
-      remaining -= end - begin;
-      if (total + remaining <= beat) return total;
-    }
-    return total;
+std::size_t NormalBins::count(const Vector3d& h, float a, float b, float cc, float d, float tau, float cos_max,
+                              std::size_t beat) const {
+  const double ha = std::abs(h.dot(axis)), hu = h.dot(e1), hv = h.dot(e2);
+  const double hp = std::sqrt(hu * hu + hv * hv);
+  const int hb = bin_of(line_pseudo_angle(hu, hv));
+  const double du = hp > 0.0 ? hu / hp : 0.0, dv = hp > 0.0 ? hv / hp : 0.0;
+  // Margin for the float arithmetic of the inlier test (|error| ~1e-6).
+  const double need = static_cast<double>(cos_max) - 1e-4;
+  int visit[kBins];
+  int num_visit = 0;
+  std::size_t remaining = 0;
+  for (int k = 0; k < kBins; ++k) {
+    if (start[k + 1] == start[k]) continue;
+    const double cos_max_bin =
+        k == hb ? 1.0
+                : std::max(std::abs(du * edge_u[k] + dv * edge_v[k]), std::abs(du * edge_u[k + 1] + dv * edge_v[k + 1]));
+    if (ha * max_along[k] + hp * max_across[k] * std::min(1.0, cos_max_bin) < need) continue;
+    visit[num_visit++] = k;
+    remaining += start[k + 1] - start[k];
   }
-};
+  std::size_t total = 0;
+  for (int v = 0; v < num_visit; ++v) {
+    const std::size_t begin = start[visit[v]], end = start[visit[v] + 1];
+    std::uint32_t in_bin = 0;
+    for (std::size_t i = begin; i < end; ++i) {
+      const float dist = std::abs(a * x[i] + b * y[i] + cc * z[i] - d);
+      const float agree = std::abs(a * nx[i] + b * ny[i] + cc * nz[i]);
+      in_bin += static_cast<std::uint32_t>((dist < tau) & (agree >= cos_max));
+    }
+    total += in_bin;
+    remaining -= end - begin;
+    if (total + remaining <= beat) return total;
+  }
+  return total;
+}
 
 /// Whether a unit normal satisfies the axis constraint (axis unit, cos/sin of ε precomputed).
-inline bool plane_constraint_ok(const Vector3d& n, AxisConstraint constraint, const Vector3d& axis,
-                                double cos_eps, double sin_eps) {
+bool plane_constraint_ok(const Vector3d& n, AxisConstraint constraint, const Vector3d& axis,
+                         double cos_eps, double sin_eps) {
   switch (constraint) {
     case AxisConstraint::kNone: return true;
     case AxisConstraint::kPerpendicular: return std::abs(n.dot(axis)) >= cos_eps;
@@ -185,7 +155,7 @@ inline bool plane_constraint_ok(const Vector3d& n, AxisConstraint constraint, co
 }
 
 /// Orient a plane's normal toward the origin (D <= 0); through the origin: normal . axis >= 0.
-inline void orient_plane(Plane& p, const Vector3d& axis) {
+void orient_plane(Plane& p, const Vector3d& axis) {
   const double tol = 1e-9;
   if (p.offset > tol || (std::abs(p.offset) <= tol && p.normal.dot(axis) < 0.0)) {
     p.normal = -p.normal;
@@ -194,8 +164,8 @@ inline void orient_plane(Plane& p, const Vector3d& axis) {
 }
 
 /// Checks the settings and the inputs' sizes of fit_plane_ransac().
-inline void check_plane_ransac_inputs(const std::vector<Vector3f>& points, const std::vector<Vector3f>& normals,
-                                      const PlaneRansacSettings& s) {
+void check_plane_ransac_inputs(const std::vector<Vector3f>& points, const std::vector<Vector3f>& normals,
+                               const PlaneRansacSettings& s) {
   PLUMB_CHECK(std::isfinite(s.distance_threshold) && s.distance_threshold > 0.0,
               "fit_plane_ransac: distance_threshold = " << s.distance_threshold << " must be finite and > 0");
   PLUMB_CHECK(s.max_iterations >= 1, "fit_plane_ransac: max_iterations = " << s.max_iterations << " must be >= 1");
@@ -214,9 +184,9 @@ inline void check_plane_ransac_inputs(const std::vector<Vector3f>& points, const
 
 /// Gathers the finite candidates into `c` (their normals too when c.has_normals is set) and, for
 /// kPointNormal sampling, their normals as given into `sample_normals`.
-inline void gather_plane_candidates(const std::vector<Vector3f>& points, const std::vector<std::size_t>& candidates,
-                                    const std::vector<Vector3f>& normals, bool point_normal, PlaneCandidates& c,
-                                    std::vector<Vector3f>& sample_normals) {
+void gather_plane_candidates(const std::vector<Vector3f>& points, const std::vector<std::size_t>& candidates,
+                             const std::vector<Vector3f>& normals, bool point_normal, PlaneCandidates& c,
+                             std::vector<Vector3f>& sample_normals) {
   const std::size_t m = candidates.empty() ? points.size() : candidates.size();
   c.x.reserve(m);
   c.y.reserve(m);
@@ -252,8 +222,8 @@ inline void gather_plane_candidates(const std::vector<Vector3f>& points, const s
 /// Draws one plane hypothesis (unit normal `nrm` through `p0`): a candidate and its normal
 /// (kPointNormal), or three distinct candidates. False when the drawn points give no plane (a bad
 /// normal, collinear points); the random draws are the same either way.
-inline bool sample_plane_hypothesis(Rng& rng, const PlaneCandidates& c, const std::vector<Vector3f>& sample_normals,
-                                    bool point_normal, Vector3d& nrm, Vector3d& p0) {
+bool sample_plane_hypothesis(Rng& rng, const PlaneCandidates& c, const std::vector<Vector3f>& sample_normals,
+                             bool point_normal, Vector3d& nrm, Vector3d& p0) {
   const std::size_t n = c.index.size();
   if (point_normal) {
     const std::size_t i0 = static_cast<std::size_t>(rng.uniform_index(n));
@@ -284,8 +254,8 @@ inline bool sample_plane_hypothesis(Rng& rng, const PlaneCandidates& c, const st
 
 /// The cloud indices of the candidates within `tau` of `pl` whose normal agrees (when c.has_normals),
 /// in candidate order.
-inline void collect_plane_inliers(const PlaneCandidates& c, const Plane& pl, float tau, float cos_normal,
-                                  std::vector<std::size_t>& inl) {
+void collect_plane_inliers(const PlaneCandidates& c, const Plane& pl, float tau, float cos_normal,
+                           std::vector<std::size_t>& inl) {
   inl.clear();
   const float a = static_cast<float>(pl.normal.x()), b = static_cast<float>(pl.normal.y()),
               cc = static_cast<float>(pl.normal.z()), d = static_cast<float>(pl.offset);
@@ -299,8 +269,8 @@ inline void collect_plane_inliers(const PlaneCandidates& c, const Plane& pl, flo
 
 /// Lowers `needed`, the iterations after which a hypothesis as good as one with inlier fraction `w`
 /// would have been drawn with probability `confidence` (log_fail = log(1 - confidence)).
-inline void update_needed_iterations(double w, bool point_normal, double confidence, double log_fail,
-                                     double& needed) {
+void update_needed_iterations(double w, bool point_normal, double confidence, double log_fail,
+                              double& needed) {
   const double w3 = point_normal ? w : w * w * w;
   if (confidence < 1.0) {
     if (w3 >= 1.0) {
@@ -313,8 +283,8 @@ inline void update_needed_iterations(double w, bool point_normal, double confide
 
 }  // namespace detail
 
-inline bool fit_plane_least_squares(const std::vector<Vector3f>& points, const std::vector<std::size_t>& indices,
-                                    Plane& plane, double* rmse) {
+bool fit_plane_least_squares(const std::vector<Vector3f>& points, const std::vector<std::size_t>& indices,
+                             Plane& plane, double* rmse) {
   const bool all = indices.empty();
   const std::size_t m = all ? points.size() : indices.size();
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
@@ -351,9 +321,9 @@ namespace detail {
 
 /// Least-squares refit of `best` to its `inliers` (settings.refine): the refit replaces the plane
 /// and its inliers when it satisfies the axis constraint and keeps at least as many inliers.
-inline void refit_plane(const std::vector<Vector3f>& points, const PlaneCandidates& c, const PlaneRansacSettings& s,
-                        const Vector3d& axis, double cos_eps, double sin_eps, float tau, float cos_normal, Plane& best,
-                        std::vector<std::size_t>& inliers) {
+void refit_plane(const std::vector<Vector3f>& points, const PlaneCandidates& c, const PlaneRansacSettings& s,
+                 const Vector3d& axis, double cos_eps, double sin_eps, float tau, float cos_normal, Plane& best,
+                 std::vector<std::size_t>& inliers) {
   Plane refit;
   if (fit_plane_least_squares(points, inliers, refit) &&
       plane_constraint_ok(refit.normal, s.constraint, axis, cos_eps, sin_eps)) {
@@ -368,10 +338,10 @@ inline void refit_plane(const std::vector<Vector3f>& points, const PlaneCandidat
 
 }  // namespace detail
 
-inline PlaneRansacResult fit_plane_ransac(const std::vector<Vector3f>& points,
-                                          const std::vector<std::size_t>& candidates,
-                                          const std::vector<Vector3f>& normals,
-                                          const PlaneRansacSettings& settings) {
+PlaneRansacResult fit_plane_ransac(const std::vector<Vector3f>& points,
+                                   const std::vector<std::size_t>& candidates,
+                                   const std::vector<Vector3f>& normals,
+                                   const PlaneRansacSettings& settings) {
   const PlaneRansacSettings& s = settings;
   detail::check_plane_ransac_inputs(points, normals, s);
   const bool point_normal = s.sampling == PlaneSampling::kPointNormal;

@@ -1,7 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#pragma once
-
-// Bodies of plumb/loam/features.hpp; include that header, not this one.
+#include "plumb/loam/features.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -12,7 +10,7 @@
 
 namespace plumb {
 
-inline double loam_cosine(const Vector3d& prev, const Vector3d& point, const Vector3d& next) {
+double loam_cosine(const Vector3d& prev, const Vector3d& point, const Vector3d& next) {
   // Zhou et al. 2021, eq. 5: cos = (d_{i-1,i}^2 + d_{i,i+1}^2 - d_{i-1,i+1}^2) / (2 d_{i-1,i} d_{i,i+1})
   const double a_sq = (point - prev).squaredNorm();
   const double b_sq = (next - point).squaredNorm();
@@ -24,7 +22,7 @@ inline double loam_cosine(const Vector3d& prev, const Vector3d& point, const Vec
 
 namespace loam_detail {
 
-inline void check_feature_settings(const LoamFeatureSettings& s) {
+void check_feature_settings(const LoamFeatureSettings& s) {
   PLUMB_CHECK(std::isfinite(s.plane_cos_max) && s.plane_cos_max >= -1.0 && s.plane_cos_max <= 1.0,
               "extract_loam_features: plane_cos_max must be in [-1, 1], got " << s.plane_cos_max);
   PLUMB_CHECK(std::isfinite(s.edge_cos_abs_max) && s.edge_cos_abs_max >= 0.0 && s.edge_cos_abs_max <= 1.0,
@@ -47,15 +45,15 @@ inline void check_feature_settings(const LoamFeatureSettings& s) {
               "extract_loam_features: parallel_beam_ratio must be > 0, got " << s.parallel_beam_ratio);
 }
 
-inline void push_feature(const PointCloud& cloud, std::size_t index, int row, PointCloud& out,
-                         std::vector<std::size_t>& indices) {
+void push_feature(const PointCloud& cloud, std::size_t index, int row, PointCloud& out,
+                  std::vector<std::size_t>& indices) {
   out.points.push_back(cloud.points[index]);
   out.rings.push_back(static_cast<std::uint16_t>(row));
   if (cloud.has_times()) out.times.push_back(cloud.times[index]);
   indices.push_back(index);
 }
 
-inline void push_feature(const PointCloud& cloud, std::size_t index, int row, PointCloud& out) {
+void push_feature(const PointCloud& cloud, std::size_t index, int row, PointCloud& out) {
   out.points.push_back(cloud.points[index]);
   out.rings.push_back(static_cast<std::uint16_t>(row));
   if (cloud.has_times()) out.times.push_back(cloud.times[index]);
@@ -73,10 +71,10 @@ struct LoamRing {
 };
 
 /// Position s in a ring as an index into its vectors.
-inline std::size_t ring_at(int s) { return static_cast<std::size_t>(s); }
+std::size_t ring_at(int s) { return static_cast<std::size_t>(s); }
 
 /// Gathers the points of image row `row` into `ring` and resets its per-point state.
-inline void gather_ring(const PointCloud& cloud, const RangeImage& image, int row, LoamRing& ring) {
+void gather_ring(const PointCloud& cloud, const RangeImage& image, int row, LoamRing& ring) {
   ring.col.clear();
   ring.idx.clear();
   ring.rng.clear();
@@ -96,7 +94,7 @@ inline void gather_ring(const PointCloud& cloud, const RangeImage& image, int ro
 }
 
 /// Marks the ring's occluded and parallel-beam points unusable (LOAM), counting them in `f`.
-inline void mark_unreliable(const LoamFeatureSettings& settings, LoamRing& ring, LoamFeatures& f) {
+void mark_unreliable(const LoamFeatureSettings& settings, LoamRing& ring, LoamFeatures& f) {
   const int n = ring.size();
   const auto U = ring_at;
   const std::vector<double>& rng = ring.rng;
@@ -127,8 +125,8 @@ inline void mark_unreliable(const LoamFeatureSettings& settings, LoamRing& ring,
 
 /// Scores the ring's usable points with the cosine of Zhou et al. 2021, eq. 5, on the points k
 /// places before and after, counting them per sector and filling the plane and edge pools.
-inline void score_ring(const PointCloud& cloud, int num_columns, int row, const LoamFeatureSettings& settings,
-                       LoamRing& ring, LoamFeatures& f) {
+void score_ring(const PointCloud& cloud, int num_columns, int row, const LoamFeatureSettings& settings,
+                LoamRing& ring, LoamFeatures& f) {
   const int n = ring.size();
   const int k = settings.neighbor_offset;
   const int max_gap = settings.max_neighbor_column_gap;
@@ -161,7 +159,7 @@ inline void score_ring(const PointCloud& cloud, int num_columns, int row, const 
 }
 
 /// Marks the point at position s and its neighbours within suppression_radius (up to a column gap) picked.
-inline void suppress_around(int s, const LoamFeatureSettings& settings, LoamRing& ring) {
+void suppress_around(int s, const LoamFeatureSettings& settings, LoamRing& ring) {
   const int n = ring.size();
   const auto U = ring_at;
   const int max_gap = settings.max_neighbor_column_gap;
@@ -190,8 +188,8 @@ struct LoamPickTarget {
 };
 
 /// Picks the points of ring.order (sorted) not picked yet into `target`, suppressing around each.
-inline void pick_in_order(const PointCloud& cloud, int row, const LoamFeatureSettings& settings, LoamRing& ring,
-                          const LoamPickTarget& target) {
+void pick_in_order(const PointCloud& cloud, int row, const LoamFeatureSettings& settings, LoamRing& ring,
+                   const LoamPickTarget& target) {
   std::sort(ring.order.begin(), ring.order.end());
   for (const auto& [key, s] : ring.order) {
     if (ring.picked[ring_at(s)]) continue;
@@ -209,8 +207,8 @@ inline void pick_in_order(const PointCloud& cloud, int row, const LoamFeatureSet
 }
 
 /// Selection per sector of the ring: edges first (they suppress plane picks next to them), then planes.
-inline void select_ring_features(const PointCloud& cloud, int num_columns, int row,
-                                 const LoamFeatureSettings& settings, LoamRing& ring, LoamFeatures& f) {
+void select_ring_features(const PointCloud& cloud, int num_columns, int row,
+                          const LoamFeatureSettings& settings, LoamRing& ring, LoamFeatures& f) {
   const int n = ring.size();
   const auto U = ring_at;
   const std::vector<double>& cosv = ring.cosv;
@@ -245,8 +243,8 @@ inline void select_ring_features(const PointCloud& cloud, int num_columns, int r
 
 }  // namespace loam_detail
 
-inline LoamFeatures extract_loam_features(const PointCloud& cloud, const RangeImage& image,
-                                          const LoamFeatureSettings& settings) {
+LoamFeatures extract_loam_features(const PointCloud& cloud, const RangeImage& image,
+                                   const LoamFeatureSettings& settings) {
   cloud.check_consistent("extract_loam_features");
   loam_detail::check_feature_settings(settings);
   const std::size_t num_pixels =
@@ -273,9 +271,9 @@ inline LoamFeatures extract_loam_features(const PointCloud& cloud, const RangeIm
   return f;
 }
 
-inline LoamFeatures extract_loam_features(const PointCloud& cloud,
-                                          const RangeImageSettings& image_settings,
-                                          const LoamFeatureSettings& settings) {
+LoamFeatures extract_loam_features(const PointCloud& cloud,
+                                   const RangeImageSettings& image_settings,
+                                   const LoamFeatureSettings& settings) {
   return extract_loam_features(cloud, build_range_image(cloud, image_settings), settings);
 }
 

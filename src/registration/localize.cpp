@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#pragma once
+#include "plumb/registration/localize.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -9,12 +9,15 @@
 #include "plumb/core/error.hpp"
 #include "plumb/features/normals.hpp"
 #include "plumb/filters/voxel_grid.hpp"
+#include "plumb/registration/overlap.hpp"
+
+#include "registration/sac_ia_detail.hpp"
 
 namespace plumb {
 
 namespace detail {
 
-inline void check_localize_settings(const LocalizeSettings& s) {
+void check_localize_settings(const LocalizeSettings& s) {
   PLUMB_CHECK(std::isfinite(s.voxel_size) && s.voxel_size > 0.0,
               "localize_coarse_to_fine: settings.voxel_size = " << s.voxel_size << " must be > 0");
   PLUMB_CHECK(std::isfinite(s.fine_voxel_size) && s.fine_voxel_size >= 0.0,
@@ -29,7 +32,7 @@ inline void check_localize_settings(const LocalizeSettings& s) {
 }
 
 /// Finite points of `cloud`, voxelised (leaf 0 = no voxel grid), with every field kept.
-inline PointCloud localize_downsample(const PointCloud& cloud, double leaf) {
+PointCloud localize_downsample(const PointCloud& cloud, double leaf) {
   PointCloud finite = cloud.select(cloud.finite_indices());
   if (leaf <= 0.0 || finite.empty()) return finite;
   VoxelGridSettings vs;
@@ -39,7 +42,7 @@ inline PointCloud localize_downsample(const PointCloud& cloud, double leaf) {
 
 /// As localize_downsample(), each of the six signed-axis normal directions voxelised on its own
 /// (points without a finite normal form a seventh group). Without normals: localize_downsample().
-inline PointCloud localize_downsample_by_normal(const PointCloud& cloud, double leaf) {
+PointCloud localize_downsample_by_normal(const PointCloud& cloud, double leaf) {
   if (leaf <= 0.0 || !cloud.has_normals()) return localize_downsample(cloud, leaf);
   std::vector<std::vector<std::size_t>> groups(7);
   for (std::size_t i : cloud.finite_indices()) {
@@ -62,15 +65,15 @@ inline PointCloud localize_downsample_by_normal(const PointCloud& cloud, double 
   return cloud.select(kept);
 }
 
-inline std::size_t count_finite_normals(const PointCloud& c) {
+std::size_t count_finite_normals(const PointCloud& c) {
   std::size_t n = 0;
   for (const Vector3f& v : c.normals) n += v.allFinite() ? 1 : 0;
   return n;
 }
 
 /// Normals for a stage's cloud: kept when present and wanted, else PCA (hybrid k + radius).
-inline void localize_normals(PointCloud& c, const LocalizeSettings& s, double leaf, bool keep,
-                             const Vector3f& viewpoint) {
+void localize_normals(PointCloud& c, const LocalizeSettings& s, double leaf, bool keep,
+                      const Vector3f& viewpoint) {
   if (c.size() < 3) return;
   if (keep && c.has_normals() && count_finite_normals(c) >= 3) return;
   NormalSettings ns;
@@ -80,7 +83,7 @@ inline void localize_normals(PointCloud& c, const LocalizeSettings& s, double le
   compute_normals(c, ns);
 }
 
-inline std::vector<FpfhSignature> localize_fpfh(const PointCloud& c, const LocalizeSettings& s) {
+std::vector<FpfhSignature> localize_fpfh(const PointCloud& c, const LocalizeSettings& s) {
   if (c.size() < 3) return std::vector<FpfhSignature>(c.size(), FpfhSignature{});
   FpfhSettings fs;
   fs.radius = static_cast<float>(s.fpfh_radius_factor * s.voxel_size);
@@ -91,8 +94,8 @@ inline std::vector<FpfhSignature> localize_fpfh(const PointCloud& c, const Local
 
 /// The source at the fine stage's voxel, with normals when the target has them (for the
 /// normal-angle rejection).
-inline PointCloud localize_fine_source(const PointCloud& source, const PointCloud& target_fine,
-                                       const LocalizeSettings& s) {
+PointCloud localize_fine_source(const PointCloud& source, const PointCloud& target_fine,
+                                const LocalizeSettings& s) {
   PointCloud fine = localize_downsample(source, s.fine_voxel_size);
   fine.normals.clear();
   if (target_fine.has_normals() && fine.size() >= 3) localize_normals(fine, s, s.fine_voxel_size, false, s.source_viewpoint);
@@ -100,8 +103,8 @@ inline PointCloud localize_fine_source(const PointCloud& source, const PointClou
 }
 
 /// The gated ICP from T_init, then (settings.polish) one round at the smallest distance.
-inline IcpResult localize_fine_stage(const PointCloud& fine, const LocalizeTarget& target,
-                                     const Eigen::Isometry3d& T_init, const LocalizeSettings& settings) {
+IcpResult localize_fine_stage(const PointCloud& fine, const LocalizeTarget& target,
+                              const Eigen::Isometry3d& T_init, const LocalizeSettings& settings) {
   IcpResult r = align_icp(fine, target.fine, *target.fine_tree, T_init, settings.icp);
   if (settings.polish && r.status != Status::kInsufficientData) {
     IcpSettings ps = settings.icp;
@@ -123,8 +126,8 @@ inline IcpResult localize_fine_stage(const PointCloud& fine, const LocalizeTarge
 
 }  // namespace detail
 
-inline LocalizeTarget prepare_localize_target(const PointCloud& target, const LocalizeSettings& settings,
-                                              LocalizeStages stages) {
+LocalizeTarget prepare_localize_target(const PointCloud& target, const LocalizeSettings& settings,
+                                       LocalizeStages stages) {
   detail::check_localize_settings(settings);
   target.check_consistent("localize_coarse_to_fine: target");
   const auto t0 = std::chrono::steady_clock::now();
@@ -149,8 +152,8 @@ inline LocalizeTarget prepare_localize_target(const PointCloud& target, const Lo
   return out;
 }
 
-inline LocalizeResult localize_coarse_to_fine(const PointCloud& source, const LocalizeTarget& target,
-                                              const LocalizeSettings& settings) {
+LocalizeResult localize_coarse_to_fine(const PointCloud& source, const LocalizeTarget& target,
+                                       const LocalizeSettings& settings) {
   detail::check_localize_settings(settings);
   source.check_consistent("localize_coarse_to_fine: source");
   LocalizeResult out;
@@ -218,8 +221,8 @@ inline LocalizeResult localize_coarse_to_fine(const PointCloud& source, const Lo
   return out;
 }
 
-inline IcpResult refine_localization(const PointCloud& source, const LocalizeTarget& target,
-                                     const Eigen::Isometry3d& T_target_source, const LocalizeSettings& settings) {
+IcpResult refine_localization(const PointCloud& source, const LocalizeTarget& target,
+                              const Eigen::Isometry3d& T_target_source, const LocalizeSettings& settings) {
   detail::check_localize_settings(settings);
   source.check_consistent("refine_localization: source");
   PLUMB_CHECK(T_target_source.matrix().allFinite(), "refine_localization: the initial pose is not finite");
@@ -230,8 +233,8 @@ inline IcpResult refine_localization(const PointCloud& source, const LocalizeTar
   return detail::localize_fine_stage(fine, target, T_target_source, settings);
 }
 
-inline LocalizeResult localize_coarse_to_fine(const PointCloud& source, const PointCloud& target,
-                                              const LocalizeSettings& settings) {
+LocalizeResult localize_coarse_to_fine(const PointCloud& source, const PointCloud& target,
+                                       const LocalizeSettings& settings) {
   const LocalizeTarget prepared = prepare_localize_target(target, settings);
   LocalizeResult r = localize_coarse_to_fine(source, prepared, settings);
   r.seconds_prepare += prepared.seconds;

@@ -1,14 +1,18 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#pragma once
-
-// Bodies of plumb/segmentation/frame_sample.hpp (included at its end).
+#include "plumb/segmentation/frame_sample.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
+#include <limits>
 #include <memory>
 
+#include "plumb/core/error.hpp"
 #include "plumb/search/kdtree.hpp"
+
+#include "features/normals_detail.hpp"
+#include "filters/voxel_sort.hpp"
+#include "segmentation/frame_sample_detail.hpp"
 
 namespace plumb {
 
@@ -48,7 +52,7 @@ struct KeyedVoxelSample {
 /// stable radix sort, without copying the points or any field. Empty when no point is finite.
 /// (A sort-free variant, hashing voxels in input order, was measured slower on a 32-beam frame:
 /// its per-point updates of voxel sums jump across memory, the radix passes stream.)
-inline KeyedVoxelSample voxel_sample_keyed(const std::vector<Vector3f>& pts, double leaf) {
+KeyedVoxelSample voxel_sample_keyed(const std::vector<Vector3f>& pts, double leaf) {
   const FiniteBounds bounds = finite_bounds(pts);
   KeyedVoxelSample out;
   if (bounds.num_finite == 0) return out;
@@ -65,18 +69,11 @@ inline KeyedVoxelSample voxel_sample_keyed(const std::vector<Vector3f>& pts, dou
 }
 
 /// The kept input indices of voxel_sample_keyed().
-inline std::vector<std::size_t> voxel_sample(const std::vector<Vector3f>& pts, double leaf) {
+std::vector<std::size_t> voxel_sample(const std::vector<Vector3f>& pts, double leaf) {
   return voxel_sample_keyed(pts, leaf).source;
 }
 
-/// normal_from_covariance() (features/normals.hpp) without trigonometry where the smallest
-/// eigenvalue is well separated, which is the case on surfaces: the smallest root of the
-/// characteristic polynomial by Newton's method from 0 (the cubic is increasing and concave up to
-/// that root, so the iterates rise monotonically onto it), the other two from the remaining
-/// quadratic, the eigenvector as the longest cross product of two rows of C - lambda0 I (as Eigen's
-/// closed form does). When lambda1 - lambda0 < 1e-3 lambda2 (no clear normal, and every thin or
-/// collinear set) it defers to normal_from_covariance(), which applies the degeneracy rule.
-inline bool normal_from_covariance_fast(const Eigen::Matrix3d& cov, Vector3f& normal) {
+bool normal_from_covariance_fast(const Eigen::Matrix3d& cov, Vector3f& normal) {
   const double trace = cov.trace();
   if (!(trace > 0.0) || !std::isfinite(trace)) return false;
   const Eigen::Matrix3d c = cov * (1.0 / trace);  // eigenvalues in [0, 1], summing to 1
@@ -114,8 +111,8 @@ inline bool normal_from_covariance_fast(const Eigen::Matrix3d& cov, Vector3f& no
 
 /// Normals of the sample by a kd-tree over it: estimate_normals() with the settings' k and radius
 /// (FrameNormals::kNearest), for the points at or below normal_max_z.
-inline void sample_normals_kdtree(const std::vector<Vector3f>& pts, const FrameSampleSettings& settings,
-                                  std::vector<Vector3f>& normals) {
+void sample_normals_kdtree(const std::vector<Vector3f>& pts, const FrameSampleSettings& settings,
+                           std::vector<Vector3f>& normals) {
   const KdTree<3> tree(pts);
   NormalSettings ns;
   ns.k = settings.normal_k;
@@ -147,9 +144,9 @@ inline void sample_normals_kdtree(const std::vector<Vector3f>& pts, const FrameS
 /// The keys are x + n_x (y + n_y z) in voxel coordinates, so a row of voxels along x is a contiguous
 /// run of the sample and the rows come in (z, y) order. The points of one row share the 3 x 3 rows
 /// around it and their x only grows, so each of those rows is walked once by a cursor.
-inline void sample_normals_voxel_block(const std::vector<Vector3f>& pts, const std::vector<std::uint64_t>& keys,
-                                       const VoxelKeyLayout& layout, const FrameSampleSettings& settings,
-                                       std::vector<Vector3f>& normals) {
+void sample_normals_voxel_block(const std::vector<Vector3f>& pts, const std::vector<std::uint64_t>& keys,
+                                const VoxelKeyLayout& layout, const FrameSampleSettings& settings,
+                                std::vector<Vector3f>& normals) {
   const std::size_t m = pts.size();
   const float nan = std::numeric_limits<float>::quiet_NaN();
   normals.assign(m, Vector3f::Constant(nan));
@@ -260,7 +257,7 @@ inline void sample_normals_voxel_block(const std::vector<Vector3f>& pts, const s
 
 }  // namespace detail
 
-inline FrameSample sample_frame(const PointCloud& cloud, const FrameSampleSettings& settings) {
+FrameSample sample_frame(const PointCloud& cloud, const FrameSampleSettings& settings) {
   const auto t0 = std::chrono::steady_clock::now();
   PLUMB_CHECK(std::isfinite(settings.voxel_size) && settings.voxel_size > 0.0,
               "sample_frame: voxel_size = " << settings.voxel_size << " must be finite and > 0");

@@ -1,7 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#pragma once
-
-// Bodies of plumb/loam/range_image.hpp; include that header, not this one.
+#include "plumb/loam/range_image.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -16,7 +14,7 @@ namespace loam_detail {
 constexpr double kDegToRad = kPi / 180.0;
 
 // Range of a point in [min_range, max_range] with finite coordinates, else a negative value.
-inline double valid_range(const Vector3f& p, const RangeImageSettings& s) {
+double valid_range(const Vector3f& p, const RangeImageSettings& s) {
   if (!p.allFinite()) return -1.0;
   const double r = p.cast<double>().norm();
   if (!(r >= s.min_range && r <= s.max_range)) return -1.0;
@@ -24,11 +22,11 @@ inline double valid_range(const Vector3f& p, const RangeImageSettings& s) {
 }
 
 // Zhou et al. 2021, eq. 1-4: alpha = asin(z / l).
-inline double elevation(const Vector3f& p, double r) {
+double elevation(const Vector3f& p, double r) {
   return std::asin(std::clamp(static_cast<double>(p.z()) / r, -1.0, 1.0));
 }
 
-inline void check_range_image_settings(const RangeImageSettings& s) {
+void check_range_image_settings(const RangeImageSettings& s) {
   PLUMB_CHECK(std::isfinite(s.horizontal_resolution_deg) && s.horizontal_resolution_deg >= 0.006 &&
                   s.horizontal_resolution_deg <= 360.0,
               "build_range_image: horizontal_resolution_deg must be in [0.006, 360], got "
@@ -51,8 +49,8 @@ inline void check_range_image_settings(const RangeImageSettings& s) {
 
 }  // namespace loam_detail
 
-inline std::vector<std::uint16_t> auto_bin_rings(const PointCloud& cloud,
-                                                 const RangeImageSettings& settings, int& num_rows) {
+std::vector<std::uint16_t> auto_bin_rings(const PointCloud& cloud,
+                                          const RangeImageSettings& settings, int& num_rows) {
   std::vector<std::uint16_t> rows(cloud.size(), RangeImage::kNoRing);
   std::vector<std::pair<double, std::size_t>> el;  // (elevation, point)
   el.reserve(cloud.size());
@@ -80,7 +78,7 @@ inline std::vector<std::uint16_t> auto_bin_rings(const PointCloud& cloud,
   return rows;
 }
 
-inline RangeImage build_range_image(const PointCloud& cloud, const RangeImageSettings& settings) {
+RangeImage build_range_image(const PointCloud& cloud, const RangeImageSettings& settings) {
   using namespace loam_detail;
   cloud.check_consistent("build_range_image");
   check_range_image_settings(settings);

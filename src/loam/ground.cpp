@@ -1,7 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#pragma once
-
-// Bodies of plumb/loam/ground.hpp; include that header, not this one.
+#include "plumb/loam/ground.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -12,8 +10,8 @@
 
 namespace plumb {
 
-inline RingGroundResult classify_ground(const PointCloud& cloud, const RangeImage& image,
-                                        const Eigen::Matrix3d& R_level, const RingGroundSettings& settings) {
+RingGroundResult classify_ground(const PointCloud& cloud, const RangeImage& image,
+                                 const Eigen::Matrix3d& R_level, const RingGroundSettings& settings) {
   PLUMB_CHECK(settings.max_slope_deg >= 0.0 && settings.max_slope_deg < 90.0,
               "classify_ground: max_slope_deg must be in [0, 90), got " << settings.max_slope_deg);
   PLUMB_CHECK(std::isfinite(settings.plane_tolerance) && settings.plane_tolerance >= 0.0,

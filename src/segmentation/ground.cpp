@@ -1,7 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#pragma once
-
-// Bodies of plumb/segmentation/ground.hpp (included at its end).
+#include "plumb/segmentation/ground.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -10,11 +8,13 @@
 #include "plumb/core/error.hpp"
 #include "plumb/segmentation/presegment.hpp"
 
+#include "segmentation/ground_detail.hpp"
+
 namespace plumb {
 
 namespace detail {
 
-inline void check_ground_settings(const GroundSettings& s) {
+void check_ground_settings(const GroundSettings& s) {
   PLUMB_CHECK(std::isnan(s.sensor_height) || (std::isfinite(s.sensor_height) && s.sensor_height > 0.0),
               "extract_ground: sensor_height = " << s.sensor_height << " must be > 0 (or NaN = unknown)");
   PLUMB_CHECK(std::isfinite(s.height_tolerance) && s.height_tolerance > 0.0,
@@ -31,8 +31,8 @@ inline void check_ground_settings(const GroundSettings& s) {
 
 /// l0 of the lowest large horizontal plane among candidate projection lengths (Liu et al. 2022, sec. 2.2,
 /// with the mounting height unknown); NaN when there is no candidate.
-inline double lowest_large_plane_length(const std::vector<double>& lengths, double tolerance, double min_fraction,
-                                        std::size_t min_count) {
+double lowest_large_plane_length(const std::vector<double>& lengths, double tolerance, double min_fraction,
+                                 std::size_t min_count) {
   if (lengths.empty()) return std::numeric_limits<double>::quiet_NaN();
   const auto [lo_it, hi_it] = std::minmax_element(lengths.begin(), lengths.end());
   const double lo = *lo_it, hi = *hi_it;
@@ -87,8 +87,8 @@ inline double lowest_large_plane_length(const std::vector<double>& lengths, doub
 
 }  // namespace detail
 
-inline GroundResult extract_ground(const PointCloud& cloud, const FrameSample& sample,
-                                   const GroundSettings& settings) {
+GroundResult extract_ground(const PointCloud& cloud, const FrameSample& sample,
+                            const GroundSettings& settings) {
   const auto t0 = std::chrono::steady_clock::now();
   const GroundSettings& s = settings;
   detail::check_ground_settings(s);
@@ -190,7 +190,7 @@ inline GroundResult extract_ground(const PointCloud& cloud, const FrameSample& s
   }
 }
 
-inline GroundResult extract_ground(const PointCloud& cloud, const GroundSettings& settings) {
+GroundResult extract_ground(const PointCloud& cloud, const GroundSettings& settings) {
   const auto t0 = std::chrono::steady_clock::now();
   detail::check_ground_settings(settings);
   FrameSampleSettings ss = settings.sample;

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#pragma once
+#include "plumb/features/fpfh.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -10,21 +10,19 @@
 #include "plumb/core/error.hpp"
 #include "plumb/search/kdtree.hpp"
 
+#include "features/fpfh_detail.hpp"
+
 namespace plumb {
 
 namespace detail {
 
 /// Bin of a value of the φ or θ feature, a cosine in [-1, 1]: floor(11 (f + 1) / 2), clamped.
-inline int fpfh_cos_bin(float f) {
+int fpfh_cos_bin(float f) {
   int b = static_cast<int>(std::floor(static_cast<float>(kFpfhBinsPerFeature) * (f + 1.0f) * 0.5f));
   return std::min(std::max(b, 0), kFpfhBinsPerFeature - 1);
 }
 
-/// Bin of the α feature α = atan2(y, x) in [-π, π], floor(11 (α + π) / 2π), without atan2: the
-/// bin is the number of bin edges β_k = -π + 2πk/11 (k = 1..10) with α >= β_k. Edges below 0 are
-/// all passed when y >= 0 and the rest none when y < 0; within a half plane α >= β_k is the sign
-/// of the cross product (cos β_k, sin β_k) x (x, y). (x, y) = (0, 0), α = 0, is the middle bin.
-inline int fpfh_angle_bin(float y, float x) {
+int fpfh_angle_bin(float y, float x) {
   // cos / sin of β_k for k = 1..10 (float of the double values)
   static constexpr float kCos[10] = {-0.841253532831181f, -0.415415013001886f, 0.142314838273285f,
                                      0.654860733945285f,  0.959492973614497f,  0.959492973614497f,
@@ -50,8 +48,8 @@ inline int fpfh_angle_bin(float y, float x) {
 /// @return false when the two normals make exactly equal angles with the line: then the source is
 ///         p1 here but p2 for the reversed pair, whose features differ. Otherwise the reversed
 ///         pair (p2, n2, p1, n1) has bit-identical features (every operation is mirrored exactly).
-inline bool fpfh_pair_bins(const Vector3f& p1, const Vector3f& n1, const Vector3f& p2,
-                           const Vector3f& n2, int bins[3]) {
+bool fpfh_pair_bins(const Vector3f& p1, const Vector3f& n1, const Vector3f& p2,
+                    const Vector3f& n2, int bins[3]) {
   Vector3f d = p2 - p1;
   const float len = d.norm();
   // Features (0, 0, 0) fall in the middle bin of each sub-histogram.
@@ -90,8 +88,8 @@ struct FpfhNeighborRows {
 };
 
 /// Checks the cloud, the settings and the indices of compute_fpfh().
-inline void check_fpfh_inputs(const PointCloud& cloud, const FpfhSettings& settings,
-                              const std::vector<std::size_t>* indices) {
+void check_fpfh_inputs(const PointCloud& cloud, const FpfhSettings& settings,
+                       const std::vector<std::size_t>* indices) {
   PLUMB_CHECK(settings.radius > 0.0f && std::isfinite(settings.radius),
               "compute_fpfh: settings.radius = " << settings.radius << " must be > 0 and finite");
   PLUMB_CHECK(!std::isnan(settings.visible_side_tolerance), "compute_fpfh: settings.visible_side_tolerance is NaN");
@@ -192,7 +190,7 @@ class FpfhNeighborhoods {
 
 /// SPFH per row (Rusu 2009), kFpfhBins values a row, each sub-histogram normalised to 100: every
 /// neighbour adds 100 / (number of neighbours) to one bin of each feature.
-inline std::vector<float> compute_spfh(const PointCloud& cloud, const FpfhNeighborhoods& nb) {
+std::vector<float> compute_spfh(const PointCloud& cloud, const FpfhNeighborhoods& nb) {
   constexpr std::uint32_t kNoRow = FpfhNeighborhoods::kNoRow;
   const FpfhNeighborRows& rows = nb.rows;
   const std::size_t num_rows = nb.row_point.size();
@@ -234,8 +232,8 @@ inline std::vector<float> compute_spfh(const PointCloud& cloud, const FpfhNeighb
 
 /// FPFH of the point of row r (Liu et al. 2022, eq. 1, with Open3D's weighting and normalisation,
 /// see the header): its SPFH plus its neighbours', weighted by 1 / squared distance.
-inline void fpfh_signature(const FpfhNeighborhoods& nb, const std::vector<float>& spfh, std::uint32_t r,
-                           FpfhSignature& sig) {
+void fpfh_signature(const FpfhNeighborhoods& nb, const std::vector<float>& spfh, std::uint32_t r,
+                    FpfhSignature& sig) {
   const FpfhNeighborRows& rows = nb.rows;
   // float sums (4 lanes); 1e-6 relative, far below the bins' 1e-3 agreement with Open3D
   float acc[kFpfhBins] = {};
@@ -258,8 +256,8 @@ inline void fpfh_signature(const FpfhNeighborhoods& nb, const std::vector<float>
 
 }  // namespace detail
 
-inline FpfhResult compute_fpfh(const PointCloud& cloud, const FpfhSettings& settings,
-                               const std::vector<std::size_t>* indices) {
+FpfhResult compute_fpfh(const PointCloud& cloud, const FpfhSettings& settings,
+                        const std::vector<std::size_t>* indices) {
   detail::check_fpfh_inputs(cloud, settings, indices);
   const std::size_t n = cloud.size();
 

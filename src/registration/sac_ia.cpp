@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#pragma once
+#include "plumb/registration/sac_ia.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -14,11 +14,14 @@
 #include "plumb/registration/feature_index.hpp"
 #include "plumb/registration/horn.hpp"
 
+#include "core/eigen_instantiations.hpp"
+#include "registration/sac_ia_detail.hpp"
+
 namespace plumb {
 
 namespace detail {
 
-inline bool fpfh_valid(const FpfhSignature& f) {
+bool fpfh_valid(const FpfhSignature& f) {
   bool any = false;
   for (float v : f) {
     if (!std::isfinite(v)) return false;
@@ -27,9 +30,8 @@ inline bool fpfh_valid(const FpfhSignature& f) {
   return any;
 }
 
-/// True when T is within `distance` (translation) and `angle` (rotation) of one of `poses`.
-inline bool near_any(const Eigen::Isometry3d& T, const std::vector<Eigen::Isometry3d>& poses, double distance,
-                     double angle) {
+bool near_any(const Eigen::Isometry3d& T, const std::vector<Eigen::Isometry3d>& poses, double distance,
+              double angle) {
   for (const Eigen::Isometry3d& E : poses) {
     if ((T.translation() - E.translation()).norm() >= distance) continue;
     if (Eigen::AngleAxisd(E.linear().transpose() * T.linear()).angle() < angle) return true;
@@ -37,7 +39,7 @@ inline bool near_any(const Eigen::Isometry3d& T, const std::vector<Eigen::Isomet
   return false;
 }
 
-inline void check_sac_ia_settings(const SacIaSettings& s) {
+void check_sac_ia_settings(const SacIaSettings& s) {
   PLUMB_CHECK(std::isfinite(s.exclude_distance) && s.exclude_distance >= 0.0 && std::isfinite(s.exclude_angle) &&
                   s.exclude_angle >= 0.0,
               "align_sac_ia: settings.exclude_distance / exclude_angle must be finite and >= 0");
@@ -171,8 +173,8 @@ struct SacIaPoints {
   std::vector<std::size_t> src_ids, tgt_ids, score_order;
 };
 
-inline SacIaPoints sac_ia_usable_points(const PointCloud& source, const std::vector<FpfhSignature>& source_features,
-                                        const PointCloud& target, const std::vector<FpfhSignature>& target_features) {
+SacIaPoints sac_ia_usable_points(const PointCloud& source, const std::vector<FpfhSignature>& source_features,
+                                 const PointCloud& target, const std::vector<FpfhSignature>& target_features) {
   SacIaPoints out;
   for (std::size_t i = 0; i < source.size(); ++i) {
     if (!source.points[i].allFinite()) continue;
@@ -362,9 +364,9 @@ class SacIaSampler {
 
 }  // namespace detail
 
-inline SacIaResult align_sac_ia(const PointCloud& source, const std::vector<FpfhSignature>& source_features,
-                                const PointCloud& target, const std::vector<FpfhSignature>& target_features,
-                                const KdTree3f& target_tree, const SacIaSettings& settings) {
+SacIaResult align_sac_ia(const PointCloud& source, const std::vector<FpfhSignature>& source_features,
+                         const PointCloud& target, const std::vector<FpfhSignature>& target_features,
+                         const KdTree3f& target_tree, const SacIaSettings& settings) {
   detail::check_sac_ia_settings(settings);
   PLUMB_CHECK(source_features.size() == source.size(),
               "align_sac_ia: " << source_features.size() << " source features for " << source.size() << " source points");
