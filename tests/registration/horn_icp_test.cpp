@@ -264,11 +264,17 @@ TEST(IcpTest, RobustKernelResistsOutliers) {
   EXPECT_LT(robust.first, plain.first);
 }
 
-TEST(IcpTest, DegeneracyIndicatorFlagsSinglePlane) {
+/// An n x n grid of points 0.1 m apart on the plane z = 0, normals up.
+PointCloud flat_plane(int n) {
   PointCloud plane;
-  for (int i = 0; i < 40; ++i)
-    for (int j = 0; j < 40; ++j) plane.points.emplace_back(0.1f * i, 0.1f * j, 0.0f);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) plane.points.emplace_back(0.1f * i, 0.1f * j, 0.0f);
   plane.normals.assign(plane.points.size(), Vector3f(0, 0, 1));
+  return plane;
+}
+
+TEST(IcpTest, DegeneracyIndicatorFlagsSinglePlane) {
+  const PointCloud plane = flat_plane(40);
   IcpSettings s;
   s.method = IcpMethod::kPointToPlane;
   s.min_overlap = 0.0;
@@ -322,10 +328,7 @@ TEST(IcpTest, NormalMatrixIsTheResidualsJacobianProduct) {
     const Eigen::SelfAdjointEigenSolver<Matrix6d> es(H / static_cast<double>(r.num_inliers));
     EXPECT_NEAR(r.degeneracy, es.eigenvalues()(0), 1e-9);
   }
-  PointCloud plane;
-  for (int i = 0; i < 30; ++i)
-    for (int j = 0; j < 30; ++j) plane.points.emplace_back(0.1f * i, 0.1f * j, 0.0f);
-  plane.normals.assign(plane.points.size(), Vector3f(0, 0, 1));
+  const PointCloud plane = flat_plane(30);
   IcpSettings s;
   s.method = IcpMethod::kPointToPlane;
   s.min_overlap = 0.0;
