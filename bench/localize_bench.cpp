@@ -37,7 +37,7 @@ struct Data {
   plumb::PointCloud bim_cloud;
   Eigen::Isometry3d T_base_lidar = Eigen::Isometry3d::Identity();
   std::vector<plumb::PointCloud> frames;
-  std::vector<Eigen::Isometry3d> truth;  ///< T_bim_base per frame
+  std::vector<Eigen::Isometry3d> truth;  ///< T_world_base per frame
 };
 
 const Data& data() {
@@ -71,8 +71,8 @@ const Data& data() {
   return d;
 }
 
-bool right(const Eigen::Isometry3d& T_bim_base, const Eigen::Isometry3d& truth) {
-  const Eigen::Isometry3d d = truth.inverse() * T_bim_base;
+bool right(const Eigen::Isometry3d& T_world_base, const Eigen::Isometry3d& truth) {
+  const Eigen::Isometry3d d = truth.inverse() * T_world_base;
   return d.translation().head<2>().norm() < 0.05 && Eigen::AngleAxisd(d.linear()).angle() < 0.5 * M_PI / 180.0;
 }
 
@@ -83,7 +83,7 @@ void bm_plumb(benchmark::State& state) {
   std::size_t k = 0, found = 0, runs = 0;
   for (auto _ : state) {
     const plumb::BimLocalization r = localizer.localize(d.frames[k], d.T_base_lidar);
-    found += r.status == plumb::Status::kOk && right(r.T_bim_base, d.truth[k]) ? 1 : 0;
+    found += r.status == plumb::Status::kOk && right(r.T_world_base, d.truth[k]) ? 1 : 0;
     ++runs;
     k = (k + 1) % d.frames.size();
   }
@@ -98,8 +98,8 @@ void bm_plumb_sacia(benchmark::State& state) {
   std::size_t k = 0, found = 0, runs = 0;
   for (auto _ : state) {
     const plumb::LocalizeResult r = plumb::localize_coarse_to_fine(d.frames[k], target, settings);
-    const Eigen::Isometry3d T_bim_base = r.T_target_source * d.T_base_lidar.inverse();
-    found += r.status == plumb::Status::kOk && right(T_bim_base, d.truth[k]) ? 1 : 0;
+    const Eigen::Isometry3d T_world_base = r.T_target_source * d.T_base_lidar.inverse();
+    found += r.status == plumb::Status::kOk && right(T_world_base, d.truth[k]) ? 1 : 0;
     ++runs;
     k = (k + 1) % d.frames.size();
   }

@@ -82,7 +82,7 @@ void BM_BimOdometryFrame(benchmark::State& state, bool use_bim) {
   restart();
   const std::size_t frames = bench::time_frames_in_order(state, 0, run.frames.size(), restart, [&](std::size_t i) {
     const BimFrameResult r = odometry->process(run.frames[i], run.stamps[i], run.odom[i]);
-    benchmark::DoNotOptimize(r.T_bim_base.data());
+    benchmark::DoNotOptimize(r.T_world_base.data());
     anchors += r.anchor.decision == AnchorDecision::kAccepted ? 1 : 0;
   });
   state.counters["points_per_frame"] = static_cast<double>(run.frames.back().size());

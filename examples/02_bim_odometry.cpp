@@ -59,19 +59,19 @@ int main(int argc, char** argv) {
                    to_string(start.status), start.ambiguous ? ", two places fit" : "");
       return 1;
     }
-    std::printf("start: x %.3f m, y %.3f m, yaw %.2f deg (storey %d, score %.2f)\n", start.T_bim_base.translation().x(),
-                start.T_bim_base.translation().y(), yaw_deg(start.T_bim_base), start.storey, start.score);
+    std::printf("start: x %.3f m, y %.3f m, yaw %.2f deg (storey %d, score %.2f)\n", start.T_world_base.translation().x(),
+                start.T_world_base.translation().y(), yaw_deg(start.T_world_base), start.storey, start.score);
 
     // 3. The loop.
     BimOdometrySettings settings;
     settings.T_base_lidar = T_base_lidar;
-    BimOdometry odometry(bim_cloud, start.T_bim_base, settings);
+    BimOdometry odometry(bim_cloud, start.T_world_base, settings);
     for (std::size_t i = 0; i < dump.num_frames(); ++i) {
       const BimFrameResult r = odometry.process(read_frame(i), dump.stamp(i), odom.at(dump.stamp(i)));
       if (i % 50 == 0 || i + 1 == dump.num_frames()) {
         std::printf("%s %zu: t %.2f s, x %.3f m, y %.3f m, yaw %.2f deg, BIM anchor %s\n",
-                    i + 1 == dump.num_frames() ? "last frame" : "frame", i, r.stamp, r.T_bim_base.translation().x(),
-                    r.T_bim_base.translation().y(), yaw_deg(r.T_bim_base), to_string(r.anchor.decision));
+                    i + 1 == dump.num_frames() ? "last frame" : "frame", i, r.stamp, r.T_world_base.translation().x(),
+                    r.T_world_base.translation().y(), yaw_deg(r.T_world_base), to_string(r.anchor.decision));
       }
     }
     return 0;

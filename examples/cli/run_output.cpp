@@ -206,7 +206,7 @@ nlohmann::json run_report_json(const RunReport& r) {
                          {"storey", l.storey},         {"seconds_search", l.seconds_search},
                          {"seconds_fine", l.seconds_fine}};
   }
-  j["T_bim_base0"] = pose_json(r.T_bim_base0);
+  j["T_world_base0"] = pose_json(r.T_world_base0);
   j["bim_points"] = r.bim_points;
   j["anchors"] = {{"attempted", r.anchors_attempted}, {"accepted", r.anchors_accepted}, {"rejected", r.anchors_rejected}};
   j["fallbacks"] = r.fallbacks;
@@ -266,7 +266,7 @@ void write_run_outputs(const RunReport& r, const nlohmann::json& report, const b
   io::SvgPlot plot;
   plot.title = title;
   if (!mesh.storeys.empty()) {
-    const double z = r.T_bim_base0.translation().z() + 1.0;
+    const double z = r.T_world_base0.translation().z() + 1.0;
     const bim::FloorPlan fp = bim::slice_floor_plan(mesh, z);
     for (std::size_t i = 0; i < fp.segment_start.size(); ++i) plot.floor_plan.push_back({fp.segment_start[i], fp.segment_end[i]});
   }

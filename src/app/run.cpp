@@ -93,7 +93,7 @@ std::optional<PointCloud> place_first_frame(const io::FrameDumpReader& dump, con
   const auto t_loc = std::chrono::steady_clock::now();
   std::optional<PointCloud> first_frame;
   if (settings.initial_pose) {
-    report.T_bim_base0 = *settings.initial_pose;
+    report.T_world_base0 = *settings.initial_pose;
   } else {
     report.localized = true;
     first_frame = frame_at(0);
@@ -106,7 +106,7 @@ std::optional<PointCloud> place_first_frame(const io::FrameDumpReader& dump, con
     const BimLocalizer localizer(mesh, bim_cloud, settings.localizer);
     report.localization = localizer.localize(*first_frame, dump.meta().T_base_lidar, hint, settings.start_hint_radius);
     report.localization_status = report.localization.status;
-    report.T_bim_base0 = report.localization.T_bim_base;
+    report.T_world_base0 = report.localization.T_world_base;
   }
   report.seconds_localize = seconds_since(t_loc);
   return first_frame;
@@ -119,7 +119,7 @@ void track_frames(const io::FrameDumpReader& dump, const OdometryInterpolator& o
   const std::size_t n = report.frames_requested;
   BimOdometrySettings os = settings.odometry;
   os.T_base_lidar = dump.meta().T_base_lidar;
-  BimOdometry odometry(std::move(bim_cloud), report.T_bim_base0, os);
+  BimOdometry odometry(std::move(bim_cloud), report.T_world_base0, os);
   const Pose2 odom0 = odom.at(dump.stamp(0));
   const auto t_frames = std::chrono::steady_clock::now();
   for (std::size_t i = 0; i < n; ++i) {
@@ -136,9 +136,9 @@ void track_frames(const io::FrameDumpReader& dump, const OdometryInterpolator& o
       report.error = std::string("frame ") + std::to_string(i) + ": " + e.what();
       break;
     }
-    report.wheel.push_back(stamp, report.T_bim_base0 * odom0.ominus().oplus(o).to_isometry());
-    report.lidar.push_back(stamp, r.T_bim_base_uncorrected);
-    report.bim.push_back(stamp, r.T_bim_base);
+    report.wheel.push_back(stamp, report.T_world_base0 * odom0.ominus().oplus(o).to_isometry());
+    report.lidar.push_back(stamp, r.T_world_base_uncorrected);
+    report.bim.push_back(stamp, r.T_world_base);
     report.anchors_attempted += r.anchor_attempted ? 1 : 0;
     report.anchors_accepted += r.anchor.decision == AnchorDecision::kAccepted ? 1 : 0;
     report.anchors_rejected += r.anchor.decision == AnchorDecision::kRejected ? 1 : 0;
@@ -207,7 +207,7 @@ void measure_against_truth(RunReport& report, const Trajectory& truth) {
   Trajectory registered, registered_gt;
   for (std::size_t i = 0; i < m; ++i) {
     if (!report.frames[i].registered) continue;
-    registered.push_back(gt.stamps[i], report.frames[i].T_bim_base_registered);
+    registered.push_back(gt.stamps[i], report.frames[i].T_world_base_registered);
     registered_gt.push_back(gt.stamps[i], gt.poses[i]);
   }
   if (registered.empty()) return;
@@ -242,8 +242,8 @@ RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& 
   }
   if (report.has_ground_truth) {
     const Eigen::Isometry3d& T0 = gt.poses.poses[0];
-    report.initial_error_xy = horizontal_error(report.T_bim_base0, T0);
-    report.initial_error_yaw_deg = std::abs(std::remainder(yaw_of(report.T_bim_base0) - yaw_of(T0), 2 * M_PI)) * 180.0 / M_PI;
+    report.initial_error_xy = horizontal_error(report.T_world_base0, T0);
+    report.initial_error_yaw_deg = std::abs(std::remainder(yaw_of(report.T_world_base0) - yaw_of(T0), 2 * M_PI)) * 180.0 / M_PI;
   }
   if (report.localization_status != Status::kOk) return report;
 

@@ -280,15 +280,15 @@ const PointCloud* BimLocalizer::refine_found(const PointCloud& frame, const Eige
     return without_floor;
   };
   const PointCloud& best_frame = frame_for(found.best_map);
-  out.fine = refine_localization(best_frame, fine_, out.T_bim_base_search * T_base_lidar, settings_.fine);
+  out.fine = refine_localization(best_frame, fine_, out.T_world_base_search * T_base_lidar, settings_.fine);
   const PointCloud* result_frame = &best_frame;
   if (close_scores) {
     // Two places explain the floor-plan slice about equally: let the whole 3D frame decide.
     const PointCloud& second_frame = frame_for(found.second_map);
-    IcpResult other = refine_localization(second_frame, fine_, out.T_bim_base_second * T_base_lidar, settings_.fine);
+    IcpResult other = refine_localization(second_frame, fine_, out.T_world_base_second * T_base_lidar, settings_.fine);
     if (other.overlap > out.fine.overlap) {
       std::swap(out.fine, other);
-      std::swap(out.T_bim_base_search, out.T_bim_base_second);
+      std::swap(out.T_world_base_search, out.T_world_base_second);
       std::swap(out.score, out.second_score);
       out.storey = found.second_map->index;
       result_frame = &second_frame;
@@ -310,14 +310,14 @@ void BimLocalizer::retry_refinement(const PointCloud& result_frame, const Eigen:
     if (n.allFinite()) walls_info += n * n.transpose();
   if (!(walls_info.trace() > 0.0)) return;
   const Vector2d weak_base = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(walls_info).eigenvectors().col(0);
-  const Vector2d weak = out.T_bim_base_search.linear().topLeftCorner<2, 2>() * weak_base;
+  const Vector2d weak = out.T_world_base_search.linear().topLeftCorner<2, 2>() * weak_base;
   for (const double side : {1.0, -1.0}) {
-    Eigen::Isometry3d T_start = out.T_bim_base_search;
+    Eigen::Isometry3d T_start = out.T_world_base_search;
     T_start.translation().head<2>() += side * settings_.retry_shift * weak;
     IcpResult retry = refine_localization(result_frame, fine_, T_start * T_base_lidar, settings_.fine);
     ++out.refine_starts;
     const Eigen::Isometry3d T_base = retry.T_target_source * T_base_lidar.inverse();
-    const double moved = (T_base.translation() - out.T_bim_base_search.translation()).norm();
+    const double moved = (T_base.translation() - out.T_world_base_search.translation()).norm();
     const bool better =
         retry.status == Status::kOk && (out.fine.status != Status::kOk || retry.overlap > out.fine.overlap);
     if (better && moved <= settings_.max_refine_shift) out.fine = std::move(retry);
@@ -326,12 +326,12 @@ void BimLocalizer::retry_refinement(const PointCloud& result_frame, const Eigen:
 
 void BimLocalizer::apply_gates(const std::vector<Vector2d>& scan, const Vector2d& sensor, const StoreySearch& found,
                                bool hinted_weak, BimLocalization& out) const {
-  const double shift = (out.T_bim_base.translation() - out.T_bim_base_search.translation()).norm();
+  const double shift = (out.T_world_base.translation() - out.T_world_base_search.translation()).norm();
   const StoreyMap* result_map = found.best_map;
   for (const StoreyMap& m : maps_)
     if (m.index == out.storey) result_map = &m;
-  const Pose2 refined{out.T_bim_base.translation().x(), out.T_bim_base.translation().y(),
-                      std::atan2(out.T_bim_base.linear()(1, 0), out.T_bim_base.linear()(0, 0))};
+  const Pose2 refined{out.T_world_base.translation().x(), out.T_world_base.translation().y(),
+                      std::atan2(out.T_world_base.linear()(1, 0), out.T_world_base.linear()(0, 0))};
   if (result_map->solid) {
     out.see_through = result_map->solid->see_through(scan, refined, sensor, settings_.see_through_margin);
   }
@@ -374,8 +374,8 @@ BimLocalization BimLocalizer::localize(const PointCloud& frame, const Eigen::Iso
   out.storey = found.best_map->index;
   out.score = found.best;
   out.second_score = found.second;
-  out.T_bim_base_search = base_pose(found.best_pose, found.best_map->floor_z);
-  if (found.second_map) out.T_bim_base_second = base_pose(found.second_pose, found.second_map->floor_z);
+  out.T_world_base_search = base_pose(found.best_pose, found.best_map->floor_z);
+  if (found.second_map) out.T_world_base_second = base_pose(found.second_pose, found.second_map->floor_z);
   const bool close_scores = found.second_map && found.second >= (1.0 - settings_.ambiguity_margin) * found.best;
 
   // The 3D refinement of the best pose (and of the second when the scores are close).
@@ -388,7 +388,7 @@ BimLocalization BimLocalizer::localize(const PointCloud& frame, const Eigen::Iso
   if (hinted_weak && !out.ambiguous && settings_.retry_shift > 0.0 && out.fine.overlap < settings_.min_overlap_hinted) {
     retry_refinement(*result_frame, T_base_lidar, normals, out);
   }
-  out.T_bim_base = out.fine.T_target_source * T_base_lidar.inverse();
+  out.T_world_base = out.fine.T_target_source * T_base_lidar.inverse();
   out.seconds_fine = seconds_since(t1);
 
   // The gates: score, ambiguity, truncated search, shift of the refinement, see-through.

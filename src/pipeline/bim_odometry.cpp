@@ -62,7 +62,7 @@ Matrix6d BimOdometrySettings::default_initial_covariance() {
   return d.asDiagonal();
 }
 
-BimOdometry::BimOdometry(std::shared_ptr<const PointCloud> bim_cloud, const Eigen::Isometry3d& T_bim_base0,
+BimOdometry::BimOdometry(std::shared_ptr<const PointCloud> bim_cloud, const Eigen::Isometry3d& T_world_base0,
                          const BimOdometrySettings& settings)
     : settings_(settings),
       bim_(std::move(bim_cloud)),
@@ -71,8 +71,8 @@ BimOdometry::BimOdometry(std::shared_ptr<const PointCloud> bim_cloud, const Eige
         f.T_base_laser = Pose2{};  // the scan is cut in the base frame
         return f;
       }()),
-      composer_(T_bim_base0, settings.initial_covariance, settings.composer),
-      T_bim_base0_(T_bim_base0) {
+      composer_(T_world_base0, settings.initial_covariance, settings.composer),
+      T_world_base0_(T_world_base0) {
   PLUMB_CHECK(settings.correct_every >= 1, "BimOdometry: correct_every must be >= 1");
   PLUMB_CHECK(settings.scan_band > 0.0 && settings.scan_angle_increment > 0.0 &&
                   settings.scan_range_max > settings.scan_range_min,
@@ -125,10 +125,10 @@ BimFrameResult BimOdometry::process(const PointCloud& lidar_frame, double stamp,
   out.seconds_front_end = seconds_since(t0);
   // The uncorrected chain: the front end's motion since the first frame, from the initial pose.
   if (frame_index_ == 0) first_front_pose_ = step.T_world_base;
-  out.T_bim_base_uncorrected = T_bim_base0_ * first_front_pose_.ominus().oplus(step.T_world_base).to_isometry();
+  out.T_world_base_uncorrected = T_world_base0_ * first_front_pose_.ominus().oplus(step.T_world_base).to_isometry();
 
   if (settings_.use_bim && frame_index_ % settings_.correct_every == 0) correct(lidar_frame, out);
-  out.T_bim_base = composer_.pose();
+  out.T_world_base = composer_.pose();
   ++frame_index_;
   out.seconds_total = seconds_since(t0);
   return out;
@@ -163,7 +163,7 @@ void BimOdometry::correct(const PointCloud& lidar_frame, BimFrameResult& out) {
   if (icp.status != Status::kOk && icp.status != Status::kNotConverged) return;
   if (icp.overlap < settings_.min_anchor_overlap || icp.num_inliers < settings_.min_anchor_inliers) return;
   out.registered = true;
-  out.T_bim_base_registered = icp.T_target_source * settings_.T_base_lidar.inverse();
+  out.T_world_base_registered = icp.T_target_source * settings_.T_base_lidar.inverse();
 
   // Information of the result: ICP's normal matrix at its final correspondences, its rotation
   // moved from the pairs' centroid m to the robot's position c (so the rank test compares like
@@ -201,7 +201,7 @@ void BimOdometry::correct(const PointCloud& lidar_frame, BimFrameResult& out) {
   Eigen::Isometry3d T_c = Eigen::Isometry3d::Identity();
   T_c.translation() = c;
   const Matrix6d info_world = body_to_world_information(T_c, 0.5 * (H_kept + H_kept.transpose()));
-  out.anchor = composer_.add_anchor(out.T_bim_base_registered, info_world);
+  out.anchor = composer_.add_anchor(out.T_world_base_registered, info_world);
 }
 
 }  // namespace plumb

@@ -111,14 +111,14 @@ const char* to_string(AnchorDecision d) {
   return "unknown";
 }
 
-PoseComposer::PoseComposer(const Eigen::Isometry3d& T_world_body0, const Matrix6d& P0,
+PoseComposer::PoseComposer(const Eigen::Isometry3d& T_world_base0, const Matrix6d& P0,
                            const PoseComposerSettings& settings)
-    : settings_(settings), pose_(T_world_body0), P_(symmetrize(P0)) {
+    : settings_(settings), pose_(T_world_base0), P_(symmetrize(P0)) {
   PLUMB_CHECK(settings.gate_probability > 0.0 && settings.gate_probability < 1.0,
               "PoseComposer: gate_probability = " << settings.gate_probability << " must be in (0, 1)");
   PLUMB_CHECK(settings.rank_tolerance >= 0.0 && settings.rank_tolerance < 1.0,
               "PoseComposer: rank_tolerance = " << settings.rank_tolerance << " must be in [0, 1)");
-  check_pose(T_world_body0, "initial pose");
+  check_pose(T_world_base0, "initial pose");
   check_symmetric_psd(P0, "initial covariance P0", true);
 }
 

@@ -104,7 +104,7 @@ TEST(BimOdometryTest, BadInputThrows) {
   const auto r0 = odometry.process(plumb::PointCloud{}, 0.0, plumb::Pose2{});
   const auto r1 = odometry.process(plumb::PointCloud{}, 0.1, plumb::Pose2{0.1, 0, 0});
   EXPECT_EQ(r1.scan_status, plumb::Status::kInsufficientData);
-  EXPECT_NEAR(r1.T_bim_base.translation().x(), 0.1, 1e-9);
+  EXPECT_NEAR(r1.T_world_base.translation().x(), 0.1, 1e-9);
   EXPECT_FALSE(r0.anchor_attempted);
 }
 

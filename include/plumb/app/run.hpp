@@ -70,7 +70,7 @@ struct RunReport {
   bool localized = false;               ///< the initial pose came from BimLocalizer
   Status localization_status = Status::kOk;
   BimLocalization localization;         ///< when localized
-  Eigen::Isometry3d T_bim_base0 = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_world_base0 = Eigen::Isometry3d::Identity();
   std::size_t bim_points = 0;
   std::size_t anchors_accepted = 0, anchors_rejected = 0, anchors_attempted = 0;
   std::size_t fallbacks = 0;            ///< front-end frames that fell back to the wheel prior
@@ -88,7 +88,7 @@ struct RunReport {
   /// alignment: the RMS and the largest error [m].
   double ape_rmse_wheel = 0.0, ape_rmse_lidar = 0.0, ape_rmse_bim = 0.0;
   double max_error_wheel = 0.0, max_error_lidar = 0.0, max_error_bim = 0.0;  ///< see ape_rmse_wheel [m]
-  /// Horizontal error of the BIM registrations alone (BimFrameResult::T_bim_base_registered) against
+  /// Horizontal error of the BIM registrations alone (BimFrameResult::T_world_base_registered) against
   /// the truth, over the frames that registered: how well the model itself places the robot. With
   /// as-built deviations (the simulator's walls are shifted and turned) this bounds the corrected pose.
   std::size_t registrations = 0;

@@ -118,12 +118,12 @@ struct BimLocalization {
   /// kOk; kInsufficientData (too few frame points in the band); kRejected (score gate, ambiguous,
   /// ICP moved too far, or nothing found in the hint region); the ICP's status when it failed.
   Status status = Status::kInsufficientData;
-  Eigen::Isometry3d T_bim_base = Eigen::Isometry3d::Identity();  ///< refined base pose in the BIM frame
-  Eigen::Isometry3d T_bim_base_search = Eigen::Isometry3d::Identity();  ///< the 2D search's pose (floor height)
+  Eigen::Isometry3d T_world_base = Eigen::Isometry3d::Identity();  ///< refined base pose in the BIM frame
+  Eigen::Isometry3d T_world_base_search = Eigen::Isometry3d::Identity();  ///< the 2D search's pose (floor height)
   int storey = -1;                 ///< BimMesh::storeys index of the pose
   double score = 0.0;              ///< 2D score of the best pose, [0, 1]
   double second_score = 0.0;       ///< best score away from it (any storey), [0, 1]
-  Eigen::Isometry3d T_bim_base_second = Eigen::Isometry3d::Identity();  ///< that pose
+  Eigen::Isometry3d T_world_base_second = Eigen::Isometry3d::Identity();  ///< that pose
   bool ambiguous = false;          ///< see BimLocalizerSettings::ambiguity_margin
   double second_overlap = -1.0;    ///< 3D overlap at the second pose (-1: not refined, scores far apart)
   double see_through = 0.0;        ///< frame points seen through model walls at the result, [0, 1]
@@ -180,7 +180,7 @@ class BimLocalizer {
   StoreySearch search_storeys(const std::vector<Vector2d>& scan, const std::vector<Vector2d>& normals,
                               const Vector2d& sensor, const std::optional<Vector2d>& hint, double hint_radius,
                               BimLocalization& out) const;
-  /// Refines out.T_bim_base_search in 3D into out.fine, and the second pose too when `close_scores`
+  /// Refines out.T_world_base_search in 3D into out.fine, and the second pose too when `close_scores`
   /// (the higher overlap wins); returns the frame the result was refined with (`frame`, or it
   /// without its floor points, kept in `without_floor`).
   const PointCloud* refine_found(const PointCloud& frame, const Eigen::Isometry3d& T_base_lidar,

@@ -91,8 +91,8 @@ Matrix3d front_end_step_covariance(const BimOdometrySettings& settings, const Po
 /// @brief What happened to one frame.
 struct BimFrameResult {
   double stamp = 0.0;
-  Eigen::Isometry3d T_bim_base = Eigen::Isometry3d::Identity();        ///< corrected pose
-  Eigen::Isometry3d T_bim_base_uncorrected = Eigen::Isometry3d::Identity();  ///< front end only, from the initial pose
+  Eigen::Isometry3d T_world_base = Eigen::Isometry3d::Identity();        ///< corrected pose
+  Eigen::Isometry3d T_world_base_uncorrected = Eigen::Isometry3d::Identity();  ///< front end only, from the initial pose
   ScanMatchMode mode = ScanMatchMode::kInitial;  ///< front-end outcome
   Status scan_status = Status::kOk;     ///< cloud_to_scan outcome (kInsufficientData: no point in the band)
   bool anchor_attempted = false;        ///< key points were registered this frame
@@ -101,10 +101,10 @@ struct BimFrameResult {
   std::size_t icp_inliers = 0;
   std::size_t num_key_points = 0;
   int anchor_dof = 0;                   ///< rank of the anchor information (6 = fully constrained)
-  /// The key points' registration passed the overlap and inlier gates: T_bim_base_registered is the
+  /// The key points' registration passed the overlap and inlier gates: T_world_base_registered is the
   /// base pose the BIM alone gives (what the anchor measured, before fusion with the front end).
   bool registered = false;
-  Eigen::Isometry3d T_bim_base_registered = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_world_base_registered = Eigen::Isometry3d::Identity();
   AnchorResult anchor;                  ///< the composer's decision (kIgnored when no anchor was made)
   double seconds_front_end = 0.0, seconds_segment = 0.0, seconds_icp = 0.0, seconds_total = 0.0;
 };
@@ -113,9 +113,9 @@ struct BimFrameResult {
 class BimOdometry {
  public:
   /// @param bim_cloud the BIM cloud with normals (bim::sample_surface of the relevant storey), world frame
-  /// @param T_bim_base0 initial pose of the base in the BIM frame (BimLocalizer or a known start)
+  /// @param T_world_base0 initial pose of the base in the BIM frame (BimLocalizer or a known start)
   /// @throws plumb::Error when the BIM cloud has no normals or too few points, or settings are invalid
-  BimOdometry(std::shared_ptr<const PointCloud> bim_cloud, const Eigen::Isometry3d& T_bim_base0,
+  BimOdometry(std::shared_ptr<const PointCloud> bim_cloud, const Eigen::Isometry3d& T_world_base0,
               const BimOdometrySettings& settings = {});
 
   /// @brief Process one frame: LiDAR points (sensor frame, deskewed to `stamp` by the caller when
@@ -135,7 +135,7 @@ class BimOdometry {
   std::unique_ptr<KdTree3f> bim_tree_;
   ScanOdometry front_end_;
   PoseComposer composer_;
-  Eigen::Isometry3d T_bim_base0_;
+  Eigen::Isometry3d T_world_base0_;
   Pose2 first_front_pose_;
   Pose2 last_front_pose_;
   Pose2 last_odom_pose_;

@@ -5,7 +5,7 @@
 /// @brief The pose composer of the BIM-corrected odometry (Liu et al. 2022, sec. 3.3, loop step (5)):
 ///        chains the front end's relative motions and applies absolute corrections from the BIM.
 ///
-/// State: the current body pose in the world (BIM) frame, `T_world_body`, and its 6x6 covariance
+/// State: the current base (body) pose in the world (BIM) frame, `T_world_base`, and its 6x6 covariance
 /// P in the world frame, with left perturbations `T_true = exp(δ) · T` (δ = [ρ; φ], plumb/core/lie.hpp).
 ///
 /// - add_motion(T_prev_cur, Q): `T ← T · T_prev_cur`; the motion's covariance Q is in the body frame
@@ -69,10 +69,10 @@ struct AnchorResult {
 /// @brief Chains relative motions and fuses absolute anchors (see the file comment).
 class PoseComposer {
  public:
-  /// @param T_world_body0 initial pose (e.g. the BimLocalizer's result)
+  /// @param T_world_base0 initial pose (e.g. the BimLocalizer's result)
   /// @param P0 its covariance, world frame, symmetric positive definite
   /// @throws plumb::Error for a non-finite pose or a P0 that is not symmetric positive definite
-  PoseComposer(const Eigen::Isometry3d& T_world_body0, const Matrix6d& P0,
+  PoseComposer(const Eigen::Isometry3d& T_world_base0, const Matrix6d& P0,
                const PoseComposerSettings& settings = {});
 
   /// @brief Chain a relative motion T_prev_cur with body-frame covariance Q (symmetric PSD).
@@ -81,7 +81,7 @@ class PoseComposer {
 
   /// @brief Fuse an absolute measurement of the current pose (information Λ, world frame, PSD).
   /// @throws plumb::Error for non-finite input or a Λ that is not symmetric PSD
-  AnchorResult add_anchor(const Eigen::Isometry3d& T_world_body_measured, const Matrix6d& information);
+  AnchorResult add_anchor(const Eigen::Isometry3d& T_world_base_measured, const Matrix6d& information);
 
   /// @brief The form of Liu et al. 2022, sec. 3.3: the correction M_e (T_meas = M_e · T) with
   ///        information Λ.
@@ -89,7 +89,7 @@ class PoseComposer {
     return add_anchor(M_e * pose_, information);
   }
 
-  const Eigen::Isometry3d& pose() const { return pose_; }  ///< current T_world_body
+  const Eigen::Isometry3d& pose() const { return pose_; }  ///< current T_world_base
   const Matrix6d& covariance() const { return P_; }       ///< current P, world frame
   std::size_t num_accepted() const { return num_accepted_; }
   std::size_t num_rejected() const { return num_rejected_; }
