@@ -231,14 +231,7 @@ void sample_normals_voxel_block(const std::vector<Vector3f>& pts, const std::vec
         for (std::size_t b = 0; b < num_block; ++b) {
           const float d = block_d[b];
           if (count == k && !(d < dist[k - 1])) continue;
-          std::size_t j = count < k ? count++ : k - 1;
-          while (j > 0 && dist[j - 1] > d) {
-            dist[j] = dist[j - 1];
-            idx[j] = idx[j - 1];
-            --j;
-          }
-          dist[j] = d;
-          idx[j] = block_idx[b];
+          detail::insert_k_best(dist.data(), idx.data(), count, k, d, block_idx[b]);
         }
       }
       std::size_t n = count;

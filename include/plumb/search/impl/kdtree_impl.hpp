@@ -25,6 +25,20 @@ namespace detail {
 /// collectors' strict "d < bound".
 float next_float_up(float v);
 
+/// Insert (d, i) into the first `count` entries of dist / idx, kept ascending by distance and at
+/// most k >= 1 long: a full array drops its last entry. The caller has checked d against the last.
+inline void insert_k_best(float* dist, std::size_t* idx, std::size_t& count, std::size_t k, float d,
+                          std::size_t i) {
+  std::size_t j = count < k ? count++ : k - 1;
+  while (j > 0 && dist[j - 1] > d) {
+    dist[j] = dist[j - 1];
+    idx[j] = idx[j - 1];
+    --j;
+  }
+  dist[j] = d;
+  idx[j] = i;
+}
+
 }  // namespace detail
 
 /// Fixed-capacity sorted insertion array (positions, distances) in caller memory: for the small k
@@ -44,14 +58,7 @@ struct KdTree<Dim>::KnnSet {
   bool accepts(float d) const { return d < worst; }
   void add(float d, std::uint32_t i) {
     if (!(d < worst)) return;
-    std::size_t j = count < k ? count++ : k - 1;
-    while (j > 0 && dist[j - 1] > d) {
-      dist[j] = dist[j - 1];
-      idx[j] = idx[j - 1];
-      --j;
-    }
-    dist[j] = d;
-    idx[j] = i;
+    detail::insert_k_best(dist, idx, count, k, d, i);
     if (count == k) worst = dist[k - 1];
   }
 };
