@@ -11,6 +11,7 @@
 #include "plumb/core/deskew.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/core/laser_scan.hpp"
+#include "plumb/core/levenberg_marquardt.hpp"
 #include "plumb/core/lie.hpp"
 #include "plumb/core/point_cloud.hpp"
 #include "plumb/core/pose2.hpp"

@@ -10,6 +10,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "plumb/core/error.hpp"
+#include "plumb/core/levenberg_marquardt.hpp"
 #include "core/eigen_instantiations.hpp"
 #include "plumb/core/robust_kernel.hpp"
 
@@ -105,15 +106,17 @@ void check_settings(const LoamSettings& s, const Eigen::Isometry3d& guess, const
               where << ": map_plane_ratio must be >= 1");
 }
 
-/// The shared solver: per round, associate at T (fills factors), then one LM step (the damping
-/// grows until the step lowers the Huber cost of these factors, at most 10 tries).
+/// The shared solver: per round, associate at T (fills factors), then one Levenberg-Marquardt step
+/// on the cost of these factors (core/levenberg_marquardt.hpp).
 template <typename Associate>
 LoamResult solve_se3(const Eigen::Isometry3d& guess, const LoamSettings& s, Associate&& associate) {
   LoamResult res;
   res.T_prev_cur = guess;
   Eigen::Isometry3d T = guess;
   std::vector<Factor> factors;
-  double lambda = s.initial_lambda;
+  LevenbergMarquardtSettings lm_settings;
+  lm_settings.initial_lambda = s.initial_lambda;
+  LevenbergMarquardt lm(lm_settings);
   Matrix6d H, H_plain;
   Vector6d g;
   double sum_sq = 0.0;
@@ -138,23 +141,11 @@ LoamResult solve_se3(const Eigen::Isometry3d& guess, const LoamSettings& s, Asso
     const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(H_plain / n, Eigen::EigenvaluesOnly);
     res.degeneracy = std::max(0.0, eig.eigenvalues()(0));
 
-    bool accepted = false;
     Vector6d delta = Vector6d::Zero();
-    for (int attempt = 0; attempt < 10 && !accepted; ++attempt) {
-      Matrix6d A = H;
-      for (int d = 0; d < 6; ++d) A(d, d) += lambda * std::max(H(d, d), 1e-9);
-      delta = A.ldlt().solve(-g);
-      if (!delta.allFinite()) break;
-      const Eigen::Isometry3d T_new = T * se3::exp(delta);
-      const double new_cost = evaluate(factors, T_new, kernel, nullptr, nullptr, nullptr, nullptr);
-      if (new_cost <= cost) {
-        T = T_new;
-        accepted = true;
-        lambda = std::max(lambda * 0.1, 1e-12);
-      } else {
-        lambda = std::max(lambda * 10.0, 1e-8);
-      }
-    }
+    const bool accepted = lm.step(H, g, cost, [&](const Vector6d& d) {
+      return evaluate(factors, T * se3::exp(d), kernel, nullptr, nullptr, nullptr, nullptr);
+    }, delta);
+    if (accepted) T = T * se3::exp(delta);
     if (!accepted || (delta.head<3>().norm() < s.min_step_translation &&
                       delta.tail<3>().norm() < s.min_step_rotation)) {
       res.converged = true;

@@ -11,6 +11,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "plumb/core/error.hpp"
+#include "plumb/core/levenberg_marquardt.hpp"
 #include "plumb/core/lie.hpp"
 #include "plumb/loam/ground.hpp"
 #include "plumb/loam/odometry.hpp"
@@ -547,7 +548,7 @@ void HybridLio::solve(Frame& f) {
   f.xj = f.pred;
   const JointProblem problem(set, f.pim ? &*f.pim : nullptr, state_, prior_information_);
   const int n = problem.dim();
-  double lambda = 1e-4;
+  LevenbergMarquardt lm;
   Matrix30d H;
   Vector30d g;
   double sum_sq = 0.0;
@@ -560,23 +561,22 @@ void HybridLio::solve(Frame& f) {
     const double cost = problem.build(f.xi, f.xj, f.corr, f.s_imu, &H, &g, &sum_sq);
     f.res.num_correspondences = f.num_matched;
     f.res.rmse = f.num_matched == 0 ? 0.0 : std::sqrt(sum_sq / static_cast<double>(f.num_matched));
-    bool accepted = false;
+    // The system of the first n unknowns (the pose of x_j alone without the IMU factor).
+    const Eigen::MatrixXd Hn = H.topLeftCorner(n, n);
+    const Eigen::VectorXd gn = g.head(n);
+    Eigen::VectorXd dn(n);
     Vector30d delta = Vector30d::Zero();
-    for (int attempt = 0; attempt < 10 && !accepted; ++attempt) {
-      Eigen::MatrixXd A = H.topLeftCorner(n, n);
-      for (int d = 0; d < n; ++d) A(d, d) += lambda * std::max(A(d, d), 1e-9);
-      delta.head(n) = A.ldlt().solve(-g.head(n));
-      if (!delta.allFinite()) break;
-      ImuState a, b;
+    ImuState a, b;
+    const bool accepted = lm.step(Hn, gn, cost, [&](const Eigen::VectorXd& d) {
+      delta.head(n) = d;
       problem.step(delta, f.xi, f.xj, a, b);
-      if (problem.build(a, b, f.corr, f.s_imu, nullptr, nullptr, nullptr) <= cost) {
-        f.xi = a;
-        f.xj = b;
-        accepted = true;
-        lambda = std::max(lambda * 0.1, 1e-12);
-      } else {
-        lambda = std::min(lambda * 10.0, 1e12);
-      }
+      return problem.build(a, b, f.corr, f.s_imu, nullptr, nullptr, nullptr);
+    }, dn);
+    delta.head(n) = dn;
+    if (accepted) {
+      problem.step(delta, f.xi, f.xj, a, b);
+      f.xi = a;
+      f.xj = b;
     }
     const Vector6d dj = delta.segment<6>(problem.offset_j());
     if (!accepted ||

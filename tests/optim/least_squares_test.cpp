@@ -159,7 +159,9 @@ TEST(LeastSquaresTest, LevenbergMarquardtConvergesWhereGaussNewtonDiverges) {
     EXPECT_GT(std::abs(gn_problem.values().vector<1>(b)(0)), 1e-3) << "x0 " << x0;
 
     LeastSquaresProblem lm_problem = madsen_problem(-2.0, x0, &b);
-    const LeastSquaresResult lm_result = solve_least_squares(lm_problem);
+    LeastSquaresSettings lm;
+    lm.function_tolerance = 1e-14;  // a nonzero residual at the minimum: error ~ sqrt(tolerance)
+    const LeastSquaresResult lm_result = solve_least_squares(lm_problem, lm);
     EXPECT_TRUE(lm_result.converged) << "x0 " << x0;
     EXPECT_LT(std::abs(lm_problem.values().vector<1>(b)(0)), 1e-6) << "x0 " << x0;
     EXPECT_NEAR(lm_result.final_cost, 1.0, 1e-10);  // F(0) = (1 + 1) / 2

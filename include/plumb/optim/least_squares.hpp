@@ -140,13 +140,13 @@ class LeastSquaresProblem {
 /// @brief Gauss-Newton or Levenberg-Marquardt.
 enum class LeastSquaresMethod {
   kGaussNewton,         ///< undamped steps, each one taken (fast near a good start, may diverge)
-  kLevenbergMarquardt,  ///< damped steps, accepted only when the cost decreases (Nielsen's update)
+  kLevenbergMarquardt,  ///< damped steps, each accepted only when it does not raise the cost (LevenbergMarquardt)
 };
 
 /// @brief Settings of solve_least_squares().
 struct LeastSquaresSettings {
   LeastSquaresMethod method = LeastSquaresMethod::kLevenbergMarquardt;  ///< algorithm
-  int max_iterations = 50;            ///< linearisations (LM: including rejected steps)
+  int max_iterations = 50;            ///< linearisations (LM: each tries up to 10 damped steps)
   /// @brief Converged when an accepted step lowers the cost by less than this fraction of it. At a
   ///        minimum with a nonzero cost this leaves an error ~ sqrt(tolerance) in the variables:
   ///        lower it (or set 0) to stop on the step and gradient tolerances only.
@@ -154,7 +154,7 @@ struct LeastSquaresSettings {
   double gradient_tolerance = 1e-12;  ///< converged when max |J^T W r| falls below this
   double step_tolerance = 1e-12;      ///< converged when |step| < tol (1 + |x|), x the R^n values
   double initial_lambda = 1e-4;       ///< LM damping, relative to diag(J^T W J) (Marquardt scaling)
-  double max_lambda = 1e12;           ///< LM gives up (kNotConverged) when the damping exceeds this
+  double max_lambda = 1e12;           ///< LM gives up (kNotConverged) when no step passes at this damping
 };
 
 /// @brief Outcome of solve_least_squares(); the solution is in problem.values().
