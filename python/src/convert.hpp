@@ -1,0 +1,85 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+/// @file
+/// @brief Conversions between numpy arrays and plumb's types for the Python module, and the
+///        keyword-argument settings of its functions.
+///
+/// Point arrays are (N, 3) float32 (float64 is converted); poses are 4x4 float64. An array of
+/// another shape or dtype raises ValueError naming what was expected and what was given.
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include "plumb/core/point_cloud.hpp"
+#include "plumb/core/trajectory.hpp"
+#include "plumb/core/types.hpp"
+
+namespace plumb::python {
+
+namespace py = pybind11;
+
+/// @brief (N, 3) float32 or float64 array -> points (float). `what` names the argument in errors.
+std::vector<Vector3f> points_from_array(const py::handle& obj, const char* what);
+/// @brief (N, 3) float32 or float64 array -> positions (double).
+std::vector<Vector3d> positions_from_array(const py::handle& obj, const char* what);
+/// @brief (3,) float32 or float64 array -> one point (float).
+Vector3f point_from_array(const py::handle& obj, const char* what);
+/// @brief Points -> a new (N, 3) float32 array.
+py::array_t<float> points_to_array(const std::vector<Vector3f>& points);
+
+/// @brief (N,) float array -> floats / doubles.
+std::vector<float> floats_from_array(const py::handle& obj, const char* what);
+std::vector<double> doubles_from_array(const py::handle& obj, const char* what);
+/// @brief (N,) integer array whose values fit Int -> values.
+template <typename Int>
+std::vector<Int> ints_from_array(const py::handle& obj, const char* what);
+
+/// @brief A vector -> a new 1-D array of the same element type (std::size_t -> int64).
+template <typename T>
+py::array vector_to_array(const std::vector<T>& values);
+py::array indices_to_array(const std::vector<std::size_t>& indices);
+
+/// @brief 4x4 float array with last row (0, 0, 0, 1) -> isometry.
+Eigen::Isometry3d pose_from_array(const py::handle& obj, const char* what);
+/// @brief Isometry -> a new 4x4 float64 array.
+py::array_t<double> pose_to_array(const Eigen::Isometry3d& pose);
+/// @brief (N, 4, 4) float array -> isometries; poses -> a new (N, 4, 4) float64 array.
+std::vector<Eigen::Isometry3d> poses_from_array(const py::handle& obj, const char* what);
+py::array_t<double> poses_to_array(const std::vector<Eigen::Isometry3d>& poses);
+
+/// @brief A plumb.PointCloud (copied) or an (N, 3) point array (a cloud without fields).
+PointCloud cloud_from_object(const py::handle& obj, const char* what);
+
+/// @brief Settings built from a function's keyword arguments: `settings=` (a bound settings
+///        object) as the start, else the C++ defaults; every other keyword sets the field of that
+///        name. An unknown keyword raises TypeError naming the function and the settings type.
+template <typename Settings>
+Settings settings_from_kwargs(const py::kwargs& kwargs, const char* function) {
+  py::object settings = py::cast(Settings{});
+  if (kwargs.contains("settings")) settings = py::cast(kwargs["settings"].cast<Settings>());
+  for (const auto& item : kwargs) {
+    const std::string name = py::str(item.first);
+    if (name == "settings") continue;
+    if (name.empty() || name[0] == '_' || !py::hasattr(settings, name.c_str())) {
+      throw py::type_error(std::string(function) + "() got an unexpected keyword argument '" + name + "' (not a field of " +
+                           py::str(py::type::of(settings).attr("__name__")).cast<std::string>() + ")");
+    }
+    settings.attr(name.c_str()) = item.second;
+  }
+  return settings.cast<Settings>();
+}
+
+/// @brief The bindings of each area, called by the module in this order.
+void bind_core(py::module_& m);
+void bind_io(py::module_& m);
+void bind_algorithms(py::module_& m);
+void bind_registration(py::module_& m);
+void bind_eval(py::module_& m);
+
+}  // namespace plumb::python
