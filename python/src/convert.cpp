@@ -22,8 +22,8 @@ py::array as_array(const py::handle& obj, const char* what, const char* expected
 
 [[noreturn]] void throw_bad_array(const py::array& arr, const char* what, const char* expected) {
   std::ostringstream os;
-  os << what << ": expected " << expected << ", got an array of shape " << py::str(arr.attr("shape")).cast<std::string>()
-     << " and dtype " << py::str(arr.dtype()).cast<std::string>();
+  os << what << ": expected " << expected << ", got an array of shape "
+     << py::str(arr.attr("shape")).cast<std::string>() << " and dtype " << py::str(arr.dtype()).cast<std::string>();
   throw py::value_error(os.str());
 }
 

@@ -67,8 +67,9 @@ Settings settings_from_kwargs(const py::kwargs& kwargs, const char* function) {
     const std::string name = py::str(item.first);
     if (name == "settings") continue;
     if (name.empty() || name[0] == '_' || !py::hasattr(settings, name.c_str())) {
-      throw py::type_error(std::string(function) + "() got an unexpected keyword argument '" + name + "' (not a field of " +
-                           py::str(py::type::of(settings).attr("__name__")).cast<std::string>() + ")");
+      const std::string type = py::str(py::type::of(settings).attr("__name__"));
+      throw py::type_error(std::string(function) + "() got an unexpected keyword argument '" + name +
+                           "' (not a field of " + type + ")");
     }
     settings.attr(name.c_str()) = item.second;
   }

@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // File formats: PCD, PLY, KITTI .bin clouds; TUM and KITTI trajectories.
 #include <filesystem>
+#include <optional>
 #include <string>
 
+#include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
 #include "convert.hpp"
@@ -15,6 +17,7 @@ namespace plumb::python {
 namespace {
 
 using Path = std::filesystem::path;
+using OptionalPath = std::optional<Path>;
 using Release = py::call_guard<py::gil_scoped_release>;
 
 void bind_cloud_io(py::module_& m) {
@@ -95,20 +98,20 @@ void bind_trajectory_io(py::module_& m) {
       py::arg("trajectory"), py::arg("path"), Release(), "Write a TUM trajectory file; needs stamps.");
   m.def(
       "read_kitti",
-      [](const Path& path, const Path& times_path, const py::kwargs& kwargs) {
+      [](const Path& path, const OptionalPath& times_path, const py::kwargs& kwargs) {
         const auto settings = settings_from_kwargs<io::TrajectoryReadSettings>(kwargs, "read_kitti");
         py::gil_scoped_release release;
-        return io::read_kitti(path.string(), times_path.string(), settings);
+        return io::read_kitti(path.string(), times_path ? times_path->string() : std::string(), settings);
       },
-      py::arg("path"), py::arg("times_path") = Path(),
+      py::arg("path"), py::arg("times_path") = py::none(),
       "Read a KITTI pose file (12 numbers per line), with its times file if `times_path` is given. Keyword "
       "arguments: the fields of TrajectoryReadSettings.");
   m.def(
       "write_kitti",
-      [](const Trajectory& trajectory, const Path& path, const Path& times_path) {
-        io::write_kitti(trajectory, path.string(), times_path.string());
+      [](const Trajectory& trajectory, const Path& path, const OptionalPath& times_path) {
+        io::write_kitti(trajectory, path.string(), times_path ? times_path->string() : std::string());
       },
-      py::arg("trajectory"), py::arg("path"), py::arg("times_path") = Path(), Release(),
+      py::arg("trajectory"), py::arg("path"), py::arg("times_path") = py::none(), Release(),
       "Write a KITTI pose file, and the stamps to `times_path` when given.");
 }
 
