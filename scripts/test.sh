@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: BSD-3-Clause
 # README command 2 (and CI): install what is missing; the layering and file-length check; release
-# build with -Werror (library, CLI, examples, benchmarks) and the find_package consumer; the demo's
-# steps of README command 1 on that build; every test built and run under ASan+UBSan; each fuzzer
-# for PLUMB_FUZZ_SECONDS (20), one per core at a time.
+# build with -Werror (library, CLI, examples, benchmarks, Python module) and the find_package
+# consumer; the Python tests (pytest) on that build; the demo's steps of README command 1 on it;
+# every test built and run under ASan+UBSan; each fuzzer for PLUMB_FUZZ_SECONDS (20), one per core
+# at a time.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root="$(pwd)"
@@ -23,6 +24,8 @@ if [ ! -f "$data_dir/SOURCES.md" ]; then
 fi
 data_dir="$(cd "$data_dir" && pwd)"
 export PLUMB_DATA_DIR="$data_dir"
+# The interpreter setup.sh installs numpy and pytest for (apt's), whatever python3 comes first on PATH.
+python=/usr/bin/python3
 
 start_time=$SECONDS
 step() { echo; echo "== [$((SECONDS - start_time)) s] $*"; }
@@ -30,17 +33,25 @@ step() { echo; echo "== [$((SECONDS - start_time)) s] $*"; }
 step "house rules a compiler does not check: layering and file lengths (scripts/check_layering.py)"
 python3 scripts/check_layering.py
 
-step "release build (-Werror): library, CLI, examples, benchmarks"
+step "release build (-Werror): library, CLI, examples, benchmarks, Python module"
 cmake -S . -B build/ci "${launcher[@]}" -DCMAKE_BUILD_TYPE=Release -DPLUMB_WERROR=ON -DPLUMB_DATA_DIR="$data_dir" \
-      -DPLUMB_BUILD_TESTS=OFF -DPLUMB_BUILD_BENCH=ON -DPLUMB_BUILD_EXAMPLES=ON \
-      -DCMAKE_INSTALL_PREFIX="$root/build/ci/prefix" >/dev/null
+      -DPLUMB_BUILD_TESTS=OFF -DPLUMB_BUILD_BENCH=ON -DPLUMB_BUILD_EXAMPLES=ON -DPLUMB_BUILD_PYTHON=ON \
+      -DPython3_EXECUTABLE="$python" -DCMAKE_INSTALL_PREFIX="$root/build/ci/prefix" >/dev/null
 cmake --build build/ci -j"$jobs"
+
+step "Python tests (pytest) on the release build"
+PYTHONPATH="$root/build/ci/python" PLUMB_CLI="$root/build/ci/examples/plumb" \
+  "$python" -m pytest -q -p no:cacheprovider python/tests
 
 step "package: install, then consumers that find_package(plumb) and link one component each"
 rm -rf build/ci/prefix build/package
 cmake --install build/ci >/dev/null
 cmake -S tests/package -B build/package -DCMAKE_PREFIX_PATH="$root/build/ci/prefix" >/dev/null
 cmake --build build/package -j"$jobs"
+# The installed Python package imports from the prefix's site directory.
+python_site="$(sed -n 's/^PLUMB_PYTHON_INSTALL_DIR:PATH=//p' build/ci/CMakeCache.txt)"
+case "$python_site" in /*) ;; *) python_site="$root/build/ci/prefix/$python_site" ;; esac
+PYTHONPATH="$python_site" "$python" -c "import plumb; assert plumb.__file__.startswith('$python_site')"
 for component in plumb core io bim sim pipeline app; do
   consumer=build/package/plumb_consumer
   [ "$component" = plumb ] || consumer="build/package/plumb_${component}_consumer"
