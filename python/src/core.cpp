@@ -12,7 +12,7 @@
 namespace plumb::python {
 namespace {
 
-/// Setter of an optional field: None or an empty array removes it.
+/// Setter of a field from an array; None empties it.
 template <typename T, typename Convert>
 void set_field(std::vector<T>& field, const py::object& value, const char* what, Convert convert) {
   if (value.is_none()) {
@@ -105,11 +105,11 @@ void bind_point_cloud(py::module_& m) {
 }
 
 Trajectory make_trajectory(const py::object& poses, const py::object& stamps) {
-  Trajectory t;
-  if (!poses.is_none()) t.poses = poses_from_array(poses, "Trajectory.poses");
-  if (!stamps.is_none()) t.stamps = doubles_from_array(stamps, "Trajectory.stamps");
-  t.check_consistent("Trajectory");
-  return t;
+  Trajectory trajectory;
+  set_field(trajectory.poses, poses, "Trajectory.poses", poses_from_array);
+  set_field(trajectory.stamps, stamps, "Trajectory.stamps", doubles_from_array);
+  trajectory.check_consistent("Trajectory");
+  return trajectory;
 }
 
 void bind_trajectory(py::module_& m) {
@@ -120,14 +120,10 @@ void bind_trajectory(py::module_& m) {
       .def(py::init(&make_trajectory), py::arg("poses") = py::none(), py::arg("stamps") = py::none())
       .def_property(
           "poses", [](const Trajectory& t) { return poses_to_array(t.poses); },
-          [](Trajectory& t, const py::object& v) {
-            t.poses = v.is_none() ? std::vector<Eigen::Isometry3d>{} : poses_from_array(v, "Trajectory.poses");
-          })
+          [](Trajectory& t, const py::object& v) { set_field(t.poses, v, "Trajectory.poses", poses_from_array); })
       .def_property(
           "stamps", [](const Trajectory& t) { return vector_to_array(t.stamps); },
-          [](Trajectory& t, const py::object& v) {
-            t.stamps = v.is_none() ? std::vector<double>{} : doubles_from_array(v, "Trajectory.stamps");
-          })
+          [](Trajectory& t, const py::object& v) { set_field(t.stamps, v, "Trajectory.stamps", doubles_from_array); })
       .def("size", &Trajectory::size)
       .def("__len__", &Trajectory::size)
       .def("empty", &Trajectory::empty)

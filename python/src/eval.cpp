@@ -97,37 +97,30 @@ void bind_eval_results(py::module_& m) {
       .def_readonly("status", &eval::RpeResult::status);
 }
 
+/// Bind `name(estimate, reference, **settings)` calling `function` with the GIL released.
+template <typename Settings, typename Result>
+void def_pair_function(py::module_& m, const char* name,
+                       Result (*function)(const Trajectory&, const Trajectory&, const Settings&), const char* doc) {
+  m.def(
+      name,
+      [name, function](const Trajectory& estimate, const Trajectory& reference, const py::kwargs& kwargs) {
+        const auto settings = settings_from_kwargs<Settings>(kwargs, name);
+        py::gil_scoped_release release;
+        return function(estimate, reference, settings);
+      },
+      py::arg("estimate"), py::arg("reference"), doc);
+}
+
 void bind_eval_functions(py::module_& m) {
-  m.def(
-      "associate",
-      [](const Trajectory& estimate, const Trajectory& reference, const py::kwargs& kwargs) {
-        const auto settings = settings_from_kwargs<eval::AssociationSettings>(kwargs, "associate");
-        py::gil_scoped_release release;
-        return eval::associate(estimate, reference, settings);
-      },
-      py::arg("estimate"), py::arg("reference"),
-      "Pair the poses of two trajectories by stamp (or by index without stamps). Keyword arguments: the fields "
-      "of AssociationSettings.");
-  m.def(
-      "ape",
-      [](const Trajectory& estimate, const Trajectory& reference, const py::kwargs& kwargs) {
-        const auto settings = settings_from_kwargs<eval::ApeSettings>(kwargs, "ape");
-        py::gil_scoped_release release;
-        return eval::compute_ape(estimate, reference, settings);
-      },
-      py::arg("estimate"), py::arg("reference"),
-      "Absolute pose error (C++ eval::compute_ape) of an associated estimate (pose i with pose i). Keyword "
-      "arguments: the fields of ApeSettings (align, axes).");
-  m.def(
-      "rpe",
-      [](const Trajectory& estimate, const Trajectory& reference, const py::kwargs& kwargs) {
-        const auto settings = settings_from_kwargs<eval::RpeSettings>(kwargs, "rpe");
-        py::gil_scoped_release release;
-        return eval::compute_rpe(estimate, reference, settings);
-      },
-      py::arg("estimate"), py::arg("reference"),
-      "Relative pose error (C++ eval::compute_rpe) of an associated estimate. Keyword arguments: the fields of "
-      "RpeSettings (delta, unit, align, pairs_along).");
+  def_pair_function(m, "associate", &eval::associate,
+                    "Pair the poses of two trajectories by stamp (or by index without stamps). Keyword arguments: "
+                    "the fields of AssociationSettings.");
+  def_pair_function(m, "ape", &eval::compute_ape,
+                    "Absolute pose error (C++ eval::compute_ape) of an associated estimate (pose i with pose i). "
+                    "Keyword arguments: the fields of ApeSettings (align, axes).");
+  def_pair_function(m, "rpe", &eval::compute_rpe,
+                    "Relative pose error (C++ eval::compute_rpe) of an associated estimate. Keyword arguments: the "
+                    "fields of RpeSettings (delta, unit, align, pairs_along).");
   m.def(
       "align_umeyama",
       [](const py::object& source, const py::object& target, bool with_scale) {

@@ -20,6 +20,21 @@ using Path = std::filesystem::path;
 using OptionalPath = std::optional<Path>;
 using Release = py::call_guard<py::gil_scoped_release>;
 
+/// Bind `name(path, cloud, encoding=default_encoding)` calling `write` with the GIL released.
+template <typename Encoding, typename Settings>
+void def_cloud_writer(py::module_& m, const char* name,
+                      void (*write)(const std::string&, const PointCloud&, const Settings&), Encoding default_encoding,
+                      const char* doc) {
+  m.def(
+      name,
+      [name, write](const Path& path, const py::object& cloud, Encoding encoding) {
+        const PointCloud c = cloud_from_object(cloud, (std::string(name) + ": cloud").c_str());
+        py::gil_scoped_release release;
+        write(path.string(), c, Settings{encoding});
+      },
+      py::arg("path"), py::arg("cloud"), py::arg("encoding") = default_encoding, doc);
+}
+
 void bind_cloud_io(py::module_& m) {
   py::enum_<io::PcdEncoding>(m, "PcdEncoding", "How write_pcd() stores the point data.")
       .value("ascii", io::PcdEncoding::kAscii)
@@ -39,26 +54,14 @@ void bind_cloud_io(py::module_& m) {
       py::arg("path"), py::arg("drop_non_finite") = false, Release(),
       "Read a PCD file (ascii, binary or binary_compressed) into a PointCloud: x y z, normal_x normal_y normal_z, "
       "intensity, ring, time and label; other fields are skipped.");
-  m.def(
-      "write_pcd",
-      [](const Path& path, const py::object& cloud, io::PcdEncoding encoding) {
-        const PointCloud c = cloud_from_object(cloud, "write_pcd: cloud");
-        py::gil_scoped_release release;
-        io::write_pcd(path.string(), c, io::PcdWriteSettings{encoding});
-      },
-      py::arg("path"), py::arg("cloud"), py::arg("encoding") = io::PcdEncoding::kBinary,
+  def_cloud_writer<io::PcdEncoding>(
+      m, "write_pcd", &io::write_pcd, io::PcdEncoding::kBinary,
       "Write a PointCloud (or an (N, 3) point array) as PCD v0.7 with every present field.");
   m.def(
       "read_ply", [](const Path& path) { return io::read_ply(path.string()); }, py::arg("path"), Release(),
       "Read the vertices of a PLY file (ascii or binary) into a PointCloud.");
-  m.def(
-      "write_ply",
-      [](const Path& path, const py::object& cloud, io::PlyEncoding encoding) {
-        const PointCloud c = cloud_from_object(cloud, "write_ply: cloud");
-        py::gil_scoped_release release;
-        io::write_ply(path.string(), c, io::PlyWriteSettings{encoding});
-      },
-      py::arg("path"), py::arg("cloud"), py::arg("encoding") = io::PlyEncoding::kBinaryLittleEndian,
+  def_cloud_writer<io::PlyEncoding>(
+      m, "write_ply", &io::write_ply, io::PlyEncoding::kBinaryLittleEndian,
       "Write a PointCloud (or an (N, 3) point array) as a PLY vertex element with every present field.");
   m.def(
       "read_kitti_bin", [](const Path& path) { return io::read_kitti_bin(path.string()); }, py::arg("path"),
