@@ -16,27 +16,6 @@ namespace {
 
 }  // namespace
 
-IcpSettings default_bim_correction_icp_settings() {
-  IcpSettings s;
-  s.method = IcpMethod::kPointToPlane;
-  s.max_correspondence_distance = 0.2;
-  s.distance_step = 0.05;
-  s.min_correspondence_distance = 0.1;
-  s.max_rounds = 4;
-  s.max_iterations = 15;
-  s.min_overlap = 0.5;
-  s.overlap_distance = 0.1;
-  s.kernel = RobustKernel::kHuber;
-  s.kernel_scale = 0.05;
-  return s;
-}
-
-ScanOdometrySettings BimOdometrySettings::default_front_end() {
-  ScanOdometrySettings s;
-  s.local_map_size = 5;
-  return s;
-}
-
 Matrix3d front_end_step_covariance(const BimOdometrySettings& s, const Pose2& front_step, const Pose2& wheel_step,
                                    bool matched, const Matrix3d& match_covariance) {
   // Pose2's operators do not wrap: a step across ±π may come as ~2π.
@@ -53,13 +32,6 @@ Matrix3d front_end_step_covariance(const BimOdometrySettings& s, const Pose2& fr
   const double eth = std::max(0.0, dth - s.wheel_tolerance_theta - s.wheel_tolerance_ratio * turn);
   c.diagonal() += Vector3d(exy * exy, exy * exy, eth * eth);
   return c;
-}
-
-Matrix6d BimOdometrySettings::default_initial_covariance() {
-  Vector6d d;
-  const double t = 0.02, r = 0.5 * 3.14159265358979323846 / 180.0;
-  d << t * t, t * t, t * t, r * r, r * r, r * r;
-  return d.asDiagonal();
 }
 
 BimOdometry::BimOdometry(std::shared_ptr<const PointCloud> bim_cloud, const Eigen::Isometry3d& T_world_base0,

@@ -36,27 +36,16 @@
 
 namespace plumb {
 
-/// @brief Grid settings of BimLocalizerSettings::map.
-inline CorrelativeMapSettings default_localizer_map() {
-  CorrelativeMapSettings m;
-  m.resolution = 0.1;
-  m.sigma = 0.1;
-  m.levels = 7;
-  return m;
-}
-
-/// @brief Fine-stage settings of BimLocalizerSettings::fine: localize_settings_for_voxel(0.15)
-///        (ICP from 0.3 m down to 0.05 m, fine voxel 0.05 m) with up to 50 iterations per round.
-inline LocalizeSettings default_localizer_fine() {
-  LocalizeSettings s = localize_settings_for_voxel(0.15);
-  s.icp.max_iterations = 50;
-  return s;
-}
-
 /// @brief Settings of BimLocalizer.
 struct BimLocalizerSettings {
   /// Per-storey likelihood grids: 10 cm cells (the ICP refines), sigma 10 cm, 6.4 m top windows.
-  CorrelativeMapSettings map = default_localizer_map();
+  CorrelativeMapSettings map = [] {
+    CorrelativeMapSettings m;
+    m.resolution = 0.1;
+    m.sigma = 0.1;
+    m.levels = 7;
+    return m;
+  }();
   double slice_min = 0.3;          ///< height band above the floor used, model and frame [m]
   double slice_max = 2.2;          ///< [m]
   double max_normal_z = 0.5;       ///< model points count as vertical faces when |n_z| <= this
@@ -87,8 +76,14 @@ struct BimLocalizerSettings {
   /// too (a weak 2D match decided by overlap put the robot 25 m off on a duplex terrace); else
   /// the result is ambiguous.
   double min_score_when_ambiguous = 0.5;
-  /// Fine stage (refine_localization): BIM cloud and frame at fine_voxel_size, point-to-plane ICP.
-  LocalizeSettings fine = default_localizer_fine();
+  /// Fine stage (refine_localization): BIM cloud and frame at fine_voxel_size, point-to-plane ICP;
+  /// localize_settings_for_voxel(0.15) (ICP from 0.3 m down to 0.05 m, fine voxel 0.05 m) with up
+  /// to 50 iterations per round.
+  LocalizeSettings fine = [] {
+    LocalizeSettings s = localize_settings_for_voxel(0.15);
+    s.icp.max_iterations = 50;
+    return s;
+  }();
   double max_refine_shift = 0.5;   ///< gate: ICP moving the base farther than this from the 2D pose [m]
   /// On a storey whose floor the model does not hold (its floor plan comes from the walls,
   /// bim::FloorSource::kWalls), the frame's points lower than this above the base (the floor it

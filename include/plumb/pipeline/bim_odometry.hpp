@@ -31,10 +31,6 @@
 
 namespace plumb {
 
-/// @brief ICP settings of the per-frame BIM registration: point-to-plane from a close guess,
-///        partial overlap (the BIM has no furniture), Huber kernel.
-IcpSettings default_bim_correction_icp_settings();
-
 /// @brief Settings of BimOdometry.
 struct BimOdometrySettings {
   Eigen::Isometry3d T_base_lidar = Eigen::Isometry3d::Identity();  ///< LiDAR points into the base frame
@@ -43,7 +39,12 @@ struct BimOdometrySettings {
   double scan_angle_increment = 0.00872664625997164788;  ///< bin width [rad] (0.5°)
   double scan_range_min = 0.3;       ///< [m]
   double scan_range_max = 40.0;      ///< [m]
-  ScanOdometrySettings front_end = default_front_end();  ///< PLICP front end (T_base_laser is ignored)
+  /// PLICP front end (T_base_laser is ignored): a local map of 5 scans.
+  ScanOdometrySettings front_end = [] {
+    ScanOdometrySettings s;
+    s.local_map_size = 5;
+    return s;
+  }();
   // Motion noise added to the front end's relative motions (world-independent, per step).
   double motion_sigma_xy = 0.01;      ///< [m] per metre travelled, plus PLICP's own covariance
   double motion_sigma_theta = 0.01;   ///< [rad] per radian turned and per metre, plus PLICP's
@@ -59,7 +60,22 @@ struct BimOdometrySettings {
   std::size_t correct_every = 1;     ///< register key points every k-th frame (>= 1)
   SegmentSettings segment;           ///< ground / vertical key points
   double key_point_voxel = 0.15;     ///< key points thinned to this voxel before ICP [m] (0 = all)
-  IcpSettings icp = default_bim_correction_icp_settings();
+  /// ICP of the per-frame BIM registration: point-to-plane from a close guess, partial overlap (the
+  /// BIM has no furniture), Huber kernel.
+  IcpSettings icp = [] {
+    IcpSettings s;
+    s.method = IcpMethod::kPointToPlane;
+    s.max_correspondence_distance = 0.2;
+    s.distance_step = 0.05;
+    s.min_correspondence_distance = 0.1;
+    s.max_rounds = 4;
+    s.max_iterations = 15;
+    s.min_overlap = 0.5;
+    s.overlap_distance = 0.1;
+    s.kernel = RobustKernel::kHuber;
+    s.kernel_scale = 0.05;
+    return s;
+  }();
   double min_anchor_overlap = 0.5;   ///< ICP overlap below this: no anchor
   std::size_t min_anchor_inliers = 100;  ///< fewer ICP inliers: no anchor
   double anchor_sigma = 0.03;        ///< residual std of one key point against the BIM [m]
@@ -71,10 +87,12 @@ struct BimOdometrySettings {
   double anchor_length = 5.0;        ///< L normalising rotation against translation in that test [m]
   PoseComposerSettings composer;
   /// Covariance of the initial pose (world frame); default 2 cm / 0.5°.
-  Matrix6d initial_covariance = default_initial_covariance();
-
-  static ScanOdometrySettings default_front_end();
-  static Matrix6d default_initial_covariance();
+  Matrix6d initial_covariance = [] {
+    Vector6d d;
+    const double t = 0.02, r = 0.5 * 3.14159265358979323846 / 180.0;
+    d << t * t, t * t, t * t, r * r, r * r, r * r;
+    return Matrix6d(d.asDiagonal());
+  }();
 };
 
 /// @brief Covariance (x, y, θ; frame of the previous base pose) BimOdometry gives one front-end step.

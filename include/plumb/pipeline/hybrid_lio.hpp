@@ -146,9 +146,33 @@ struct LioSolverSettings {
 
 /// @brief HybridLio's local maps (bounded voxel hash maps, world frame) and the frame's queries.
 struct LioMapSettings {
-  VoxelHashMapSettings edge_map{0.3, 1, 60.0, 100000};    ///< LOAM edge points
-  VoxelHashMapSettings plane_map{0.4, 1, 60.0, 100000};   ///< LOAM plane points
-  VoxelHashMapSettings point_map{0.4, 4, 60.0, 150000};   ///< ICP points
+  /// LOAM edge points
+  VoxelHashMapSettings edge_map = [] {
+    VoxelHashMapSettings m;
+    m.voxel_size = 0.3;
+    m.max_points_per_voxel = 1;
+    m.max_distance = 60.0;
+    m.max_voxels = 100000;
+    return m;
+  }();
+  /// LOAM plane points
+  VoxelHashMapSettings plane_map = [] {
+    VoxelHashMapSettings m;
+    m.voxel_size = 0.4;
+    m.max_points_per_voxel = 1;
+    m.max_distance = 60.0;
+    m.max_voxels = 100000;
+    return m;
+  }();
+  /// ICP points
+  VoxelHashMapSettings point_map = [] {
+    VoxelHashMapSettings m;
+    m.voxel_size = 0.4;
+    m.max_points_per_voxel = 4;
+    m.max_distance = 60.0;
+    m.max_voxels = 150000;
+    return m;
+  }();
   double icp_voxel_size = 0.6;  ///< a frame's ICP queries: one point per voxel of this size [m]
   /// LOAM plane queries and plane map points: every return, off the ground one per voxel of
   /// plane_query_voxel, on the ground one per ground_query_voxel (LOAM's mapping matches all "less

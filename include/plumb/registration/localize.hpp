@@ -21,22 +21,6 @@
 
 namespace plumb {
 
-/// @brief ICP settings of the fine stage of localize_coarse_to_fine() (point-to-plane, partial
-///        overlap accepted: a LiDAR frame sees clutter the BIM does not have).
-inline IcpSettings default_localize_icp_settings() {
-  IcpSettings s;
-  s.method = IcpMethod::kPointToPlane;
-  s.max_correspondence_distance = 0.6;
-  s.distance_step = 0.1;
-  s.min_correspondence_distance = 0.1;
-  s.min_overlap = 0.5;
-  s.overlap_distance = 0.1;
-  s.max_iterations = 30;
-  s.kernel = RobustKernel::kHuber;
-  s.kernel_scale = 0.1;
-  return s;
-}
-
 /// @brief Settings of localize_coarse_to_fine(). The coarse stage's lengths scale with `voxel_size`.
 struct LocalizeSettings {
   double voxel_size = 0.3;              ///< voxel of the coarse stage (both clouds) [m], > 0
@@ -61,7 +45,21 @@ struct LocalizeSettings {
   SacIaSettings sac_ia{};
   /// Voxel of the fine stage for both clouds [m]; 0 = full resolution.
   double fine_voxel_size = 0.1;
-  IcpSettings icp = default_localize_icp_settings();  ///< fine stage
+  /// ICP of the fine stage: point-to-plane, partial overlap accepted (a LiDAR frame sees clutter the
+  /// BIM does not have), Huber kernel.
+  IcpSettings icp = [] {
+    IcpSettings s;
+    s.method = IcpMethod::kPointToPlane;
+    s.max_correspondence_distance = 0.6;
+    s.distance_step = 0.1;
+    s.min_correspondence_distance = 0.1;
+    s.min_overlap = 0.5;
+    s.overlap_distance = 0.1;
+    s.max_iterations = 30;
+    s.kernel = RobustKernel::kHuber;
+    s.kernel_scale = 0.1;
+    return s;
+  }();
   /// After the gated ICP, one more ICP round at icp.min_correspondence_distance (no gate) so that
   /// only close surface pairs shape the final estimate; the gate's status is kept.
   bool polish = true;
