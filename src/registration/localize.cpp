@@ -126,6 +126,20 @@ IcpResult localize_fine_stage(const PointCloud& fine, const LocalizeTarget& targ
 
 }  // namespace detail
 
+LocalizeSettings localize_settings_for_voxel(double v) {
+  PLUMB_CHECK(std::isfinite(v) && v > 0.0, "localize_settings_for_voxel: voxel size " << v << " must be > 0");
+  LocalizeSettings s;
+  s.voxel_size = v;
+  s.fine_voxel_size = v / 3.0;
+  s.sac_ia.min_sample_distance = v * 10.0 / 3.0;
+  s.icp.max_correspondence_distance = 2.0 * v;
+  s.icp.distance_step = v / 3.0;
+  s.icp.min_correspondence_distance = v / 3.0;
+  s.icp.overlap_distance = v / 3.0;
+  s.icp.kernel_scale = v / 3.0;
+  return s;
+}
+
 LocalizeTarget prepare_localize_target(const PointCloud& target, const LocalizeSettings& settings,
                                        LocalizeStages stages) {
   detail::check_localize_settings(settings);

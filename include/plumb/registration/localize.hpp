@@ -5,13 +5,11 @@
 ///        normals -> FPFH -> SAC-IA (Huber) -> overlap-gated ICP. Finds a LiDAR frame in the BIM
 ///        cloud without an initial guess.
 
-#include <cmath>
 #include <cstddef>
 #include <memory>
 
 #include <Eigen/Geometry>
 
-#include "plumb/core/error.hpp"
 #include "plumb/core/point_cloud.hpp"
 #include "plumb/core/status.hpp"
 #include "plumb/features/fpfh.hpp"
@@ -82,19 +80,7 @@ struct LocalizeSettings {
 ///        v = 0.3 m): fine voxel v/3, SAC-IA sample distance 10v/3, ICP from 2v down to v/3,
 ///        overlap distance and kernel scale v/3.
 /// @throws plumb::Error unless v is finite and > 0
-inline LocalizeSettings localize_settings_for_voxel(double v) {
-  PLUMB_CHECK(std::isfinite(v) && v > 0.0, "localize_settings_for_voxel: voxel size " << v << " must be > 0");
-  LocalizeSettings s;
-  s.voxel_size = v;
-  s.fine_voxel_size = v / 3.0;
-  s.sac_ia.min_sample_distance = v * 10.0 / 3.0;
-  s.icp.max_correspondence_distance = 2.0 * v;
-  s.icp.distance_step = v / 3.0;
-  s.icp.min_correspondence_distance = v / 3.0;
-  s.icp.overlap_distance = v / 3.0;
-  s.icp.kernel_scale = v / 3.0;
-  return s;
-}
+LocalizeSettings localize_settings_for_voxel(double v);
 
 /// @brief The target side of localize_coarse_to_fine(), prepared once for many sources (the BIM
 ///        cloud of a building): voxelised clouds, normals, FPFH and kd-trees.
