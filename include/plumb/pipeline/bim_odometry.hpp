@@ -39,7 +39,7 @@ struct BimOdometrySettings {
   double scan_angle_increment = 0.00872664625997164788;  ///< bin width [rad] (0.5°)
   double scan_range_min = 0.3;       ///< [m]
   double scan_range_max = 40.0;      ///< [m]
-  /// PLICP front end (T_base_laser is ignored): a local map of 5 scans.
+  /// PLICP front end (T_base_laser is ignored) with 5 keyframes in its local map.
   ScanOdometrySettings front_end = [] {
     ScanOdometrySettings s;
     s.local_map_size = 5;
