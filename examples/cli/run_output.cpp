@@ -73,8 +73,8 @@ std::string join(const std::vector<std::string>& names) {
 }  // namespace
 
 const std::vector<std::string>& frame_dump_names() {
-  static const std::vector<std::string> names = {"meta.json", "frames.csv", "frames",  "wheels.csv",
-                                                 "odom.csv",  "imu.csv",    "gt.tum", "gt_dense.tum"};
+  static const std::vector<std::string> names = {"meta.json", "frames.csv", "frames",       "wheels.csv",   "odom.csv",
+                                                 "imu.csv",   "gt.tum",     "gt_dense.tum", "as_built.json"};
   return names;
 }
 

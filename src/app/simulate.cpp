@@ -50,6 +50,7 @@ sim::ScenarioResult simulate_to_dump(const bim::BimMesh& mesh, const std::string
   writer.write_imu(r.imu);
   if (!r.ground_truth.empty()) writer.write_ground_truth(r.ground_truth);
   writer.write_ground_truth_dense(r.ground_truth_dense);
+  writer.write_as_built(r.as_built);
   sim::ScenarioResult summary = r.summary;
   summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;

@@ -286,6 +286,47 @@ FrameDumpMeta parse_frame_dump_meta(const std::string& text, const std::string& 
   return meta;
 }
 
+// ---- as_built.json -------------------------------------------------------------------------------
+
+std::string frame_dump_as_built_json(const std::vector<ElementDeviation>& elements) {
+  std::string s = "{\n  \"elements\": [";
+  for (std::size_t i = 0; i < elements.size(); ++i) {
+    s += i == 0 ? "\n    {\"global_id\": " : ",\n    {\"global_id\": ";
+    detail::append_json_string(s, elements[i].global_id);
+    s += ", \"type\": ";
+    detail::append_json_string(s, elements[i].type);
+    s += ", \"T_design_asbuilt\": ";
+    append_transform(s, elements[i].T_design_asbuilt);
+    s += '}';
+  }
+  s += elements.empty() ? "]\n}\n" : "\n  ]\n}\n";
+  return s;
+}
+
+std::vector<ElementDeviation> parse_frame_dump_as_built(const std::string& text, const std::string& name) {
+  const JsonValue root = detail::parse_json(text, name);
+  if (root.kind != JsonValue::Kind::kObject) fail_at(name, root, "the document must be a JSON object");
+  const JsonValue* list = root.find("elements");
+  if (list == nullptr) fail_at(name, root, "missing required key \"elements\"");
+  if (list->kind != JsonValue::Kind::kArray) fail_at(name, *list, "\"elements\" must be an array");
+  std::vector<ElementDeviation> out;
+  out.reserve(list->array.size());
+  for (const JsonValue& entry : list->array) {
+    if (entry.kind != JsonValue::Kind::kObject) fail_at(name, entry, "an entry of \"elements\" must be an object");
+    auto required = [&](const char* key) {
+      const JsonValue* v = entry.find(key);
+      if (v == nullptr) fail_at(name, entry, std::string("missing required key \"") + key + "\"");
+      return v;
+    };
+    ElementDeviation e;
+    e.global_id = json_string(name, *required("global_id"), "global_id");
+    e.type = json_string(name, *required("type"), "type");
+    e.T_design_asbuilt = get_transform(name, *required("T_design_asbuilt"), "T_design_asbuilt");
+    out.push_back(std::move(e));
+  }
+  return out;
+}
+
 // ---- CSV files -----------------------------------------------------------------------------------
 
 FrameDumpIndex parse_frame_dump_frames(const std::string& text, const std::string& name) {
@@ -343,7 +384,7 @@ FrameDumpWriter::FrameDumpWriter(const std::string& dir, const FrameDumpMeta& me
   // The whole set of a dump's files: without overwrite any of them refuses the directory; with
   // it they are all removed first, so that a shorter dump leaves no stale frame or file behind.
   static const char* const kDumpFiles[] = {"meta.json", "frames.csv", "wheels.csv", "odom.csv",
-                                           "imu.csv",   "gt.tum",     "gt_dense.tum"};
+                                           "imu.csv",   "gt.tum",     "gt_dense.tum", "as_built.json"};
   for (const char* f : kDumpFiles) {
     const fs::path p = fs::path(dir) / f;
     if (!fs::exists(p)) continue;
@@ -421,6 +462,10 @@ void FrameDumpWriter::write_ground_truth_dense(const Trajectory& T_world_base) {
   write_tum(T_world_base, join_path(dir_, "gt_dense.tum"));
 }
 
+void FrameDumpWriter::write_as_built(const std::vector<ElementDeviation>& elements) {
+  write_text_file(join_path(dir_, "as_built.json"), frame_dump_as_built_json(elements));
+}
+
 void FrameDumpWriter::close() {
   if (frames_csv_ == nullptr) return;
   const bool failed = std::fclose(frames_csv_) != 0;
@@ -459,6 +504,7 @@ bool FrameDumpReader::has_odometry() const { return fs::exists(join_path(dir_, "
 bool FrameDumpReader::has_imu() const { return fs::exists(join_path(dir_, "imu.csv")); }
 bool FrameDumpReader::has_ground_truth() const { return fs::exists(join_path(dir_, "gt.tum")); }
 bool FrameDumpReader::has_ground_truth_dense() const { return fs::exists(join_path(dir_, "gt_dense.tum")); }
+bool FrameDumpReader::has_as_built() const { return fs::exists(join_path(dir_, "as_built.json")); }
 
 std::vector<WheelEncoderReading> FrameDumpReader::wheels() const {
   return read_wheel_encoders(join_path(dir_, "wheels.csv"));
@@ -476,5 +522,10 @@ std::vector<ImuSample> FrameDumpReader::imu() const {
 
 Trajectory FrameDumpReader::ground_truth() const { return read_tum(join_path(dir_, "gt.tum")); }
 Trajectory FrameDumpReader::ground_truth_dense() const { return read_tum(join_path(dir_, "gt_dense.tum")); }
+
+std::vector<ElementDeviation> FrameDumpReader::as_built() const {
+  const std::string path = join_path(dir_, "as_built.json");
+  return parse_frame_dump_as_built(read_text(path), path);
+}
 
 }  // namespace plumb::io

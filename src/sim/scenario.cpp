@@ -263,6 +263,11 @@ ScenarioRecording simulate_scenario(const ScenarioPlan& plan, const ScenarioSett
   imu_settings.seed = mix(s.seed, 2);
   r.imu = simulate_imu(traj, s.T_base_imu, imu_settings).samples;
   for (const RobotState& st : traj.states) r.ground_truth_dense.push_back(st.t, traj.T_world_base(st.t));
+  const std::vector<bim::BimElement>& elements = plan.world->bim().elements;
+  r.as_built.reserve(elements.size());
+  for (std::size_t e = 0; e < elements.size(); ++e) {
+    r.as_built.push_back({elements[e].global_id, elements[e].type, plan.world->element_deviation(e)});
+  }
 
   r.summary.num_frames = total;
   r.summary.path_length = traj.length();

@@ -2,12 +2,16 @@
 #include "plumb/io/frame_dump.hpp"
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
+#include "cli_runner.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/core/rng.hpp"
 #include "test_data.hpp"
@@ -363,6 +367,134 @@ TEST(FrameDumpTest, MetaNumbersRoundTripBitForBit) {
     EXPECT_TRUE(a == b && std::signbit(a) == std::signbit(b)) << i << ": " << a << " read back as " << b;
   }
   EXPECT_EQ(back.axle, meta.axle);
+}
+
+// ---- as_built.json ---------------------------------------------------------------------------------
+
+FrameDumpMeta identity_meta() {
+  FrameDumpMeta meta;
+  meta.lidar.name = "vlp16";
+  return meta;
+}
+
+/// Elements with random small rigid motions and ids as IFC writes them ($ and _ included).
+std::vector<ElementDeviation> some_elements(std::size_t n) {
+  Rng rng(5);
+  std::vector<ElementDeviation> out;
+  for (std::size_t i = 0; i < n; ++i) {
+    ElementDeviation e;
+    e.global_id = "0a$B_" + std::to_string(i) + "xY9\"q\\";
+    e.type = i % 2 == 0 ? "IfcWallStandardCase" : "IfcSlab";
+    const Vector3d axis = Vector3d(rng.normal(), rng.normal(), rng.normal()).normalized();
+    e.T_design_asbuilt.linear() = Eigen::AngleAxisd(rng.uniform(-0.01, 0.01), axis).toRotationMatrix();
+    e.T_design_asbuilt.translation() = Vector3d(rng.normal(), rng.normal(), rng.normal()) * 0.01;
+    out.push_back(e);
+  }
+  return out;
+}
+
+// Written, then read back by the reader and by nlohmann_json: the ids and types as given, the 16
+// numbers bit for bit as written (nlohmann), the transforms within rounding (the reader makes the
+// rotation exactly orthonormal).
+TEST(AsBuiltJsonTest, RoundTripsThroughTheDump) {
+  const std::string dir = fresh_dir("as_built_round_trip");
+  const std::vector<ElementDeviation> elements = some_elements(7);
+  {
+    FrameDumpWriter w(dir, identity_meta());
+    w.write_as_built(elements);
+  }
+  const FrameDumpReader reader(dir);
+  ASSERT_TRUE(reader.has_as_built());
+  const std::vector<ElementDeviation> back = reader.as_built();
+  ASSERT_EQ(back.size(), elements.size());
+  const nlohmann::json doc = nlohmann::json::parse(test::read_text(dir + "/as_built.json"));
+  ASSERT_EQ(doc.at("elements").size(), elements.size());
+  for (std::size_t i = 0; i < elements.size(); ++i) {
+    EXPECT_EQ(back[i].global_id, elements[i].global_id);
+    EXPECT_EQ(back[i].type, elements[i].type);
+    EXPECT_TRUE(back[i].T_design_asbuilt.isApprox(elements[i].T_design_asbuilt, 1e-14)) << i;
+    const nlohmann::json& e = doc["elements"][i];
+    EXPECT_EQ(e.at("global_id").get<std::string>(), elements[i].global_id);
+    EXPECT_EQ(e.at("type").get<std::string>(), elements[i].type);
+    const std::vector<double> m = e.at("T_design_asbuilt").get<std::vector<double>>();
+    ASSERT_EQ(m.size(), 16u);
+    for (int r = 0; r < 4; ++r) {
+      for (int c = 0; c < 4; ++c) {
+        EXPECT_EQ(m[static_cast<std::size_t>(4 * r + c)], elements[i].T_design_asbuilt.matrix()(r, c)) << i;
+      }
+    }
+  }
+  // No elements: an empty list, read back as such.
+  EXPECT_TRUE(parse_frame_dump_as_built(frame_dump_as_built_json({})).empty());
+  fs::remove_all(dir);
+}
+
+// A dump without as_built.json reads as before; asking for it names the file. Overwriting a dump
+// removes the earlier as_built.json with the rest of the set.
+TEST(AsBuiltJsonTest, MissingFileAndOverwrite) {
+  const std::string dir = fresh_dir("as_built_missing");
+  {
+    FrameDumpWriter w(dir, identity_meta());
+  }
+  const FrameDumpReader reader(dir);
+  EXPECT_FALSE(reader.has_as_built());
+  const std::string msg = test::error_of([&] { reader.as_built(); });
+  EXPECT_NE(msg.find("as_built.json"), std::string::npos) << msg;
+
+  {
+    FrameDumpWriter w(dir, identity_meta(), {PcdEncoding::kBinary, true});
+    w.write_as_built(some_elements(2));
+  }
+  EXPECT_TRUE(FrameDumpReader(dir).has_as_built());
+  EXPECT_THROW(FrameDumpWriter(dir, identity_meta()), Error);
+  {
+    FrameDumpWriter w(dir, identity_meta(), {PcdEncoding::kBinary, true});
+  }
+  EXPECT_FALSE(FrameDumpReader(dir).has_as_built());
+  fs::remove_all(dir);
+}
+
+// Every malformed as_built.json names the file, line and column of the offending value.
+TEST(AsBuiltJsonTest, MalformedFileNamesFileLineAndColumn) {
+  const std::string dir = fresh_dir("as_built_malformed");
+  {
+    FrameDumpWriter w(dir, identity_meta());
+  }
+  const std::string T = "[1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]";
+  struct Case {
+    std::string json;
+    std::string expected;  // the message after DIR/
+  };
+  const Case cases[] = {
+      {"{\"elements\": [\n  {\"global_id\": \"a\", \"type\": \"IfcWall\", \"T_design_asbuilt\": " + T + "},,\n]}",
+       "as_built.json:2:"},
+      {"{\"elements\": 3}", "as_built.json:1:14: \"elements\" must be an array"},
+      {"{\"items\": []}", "as_built.json:1:1: missing required key \"elements\""},
+      {"[]", "as_built.json:1:1: the document must be a JSON object"},
+      {"{\"elements\": [7]}", "as_built.json:1:15: an entry of \"elements\" must be an object"},
+      {"{\"elements\": [{\"type\": \"IfcWall\", \"T_design_asbuilt\": " + T + "}]}",
+       "as_built.json:1:15: missing required key \"global_id\""},
+      {"{\"elements\": [\n{\"global_id\": 12, \"type\": \"IfcWall\", \"T_design_asbuilt\": " + T + "}]}",
+       "as_built.json:2:15: \"global_id\" must be a string"},
+      {"{\"elements\": [{\"global_id\": \"a\", \"type\": \"IfcWall\", \"T_design_asbuilt\": [1,0,0]}]}",
+       "as_built.json:1:73: \"T_design_asbuilt\" must hold 16 numbers"},
+      {"{\"elements\": [{\"global_id\": \"a\", \"type\": \"IfcWall\", \"T_design_asbuilt\": "
+       "[2,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]}]}",
+       "as_built.json:1:73: \"T_design_asbuilt\": upper-left 3x3 block is not a rotation"},
+      {"{\"elements\": [{\"global_id\": \"a\", \"type\": \"IfcWall\", \"T_design_asbuilt\": "
+       "[1,0,0,1e999, 0,1,0,0, 0,0,1,0, 0,0,0,1]}]}",
+       "as_built.json:1:80: \"T_design_asbuilt\" must be a finite number"},
+      {"", "as_built.json:1:1: "},
+  };
+  const FrameDumpReader reader(dir);
+  const std::string path = (fs::path(dir) / "as_built.json").string();
+  for (const Case& c : cases) {
+    test::write_text(path, c.json);
+    const std::string msg = test::error_of([&] { reader.as_built(); });
+    EXPECT_EQ(msg.rfind(path.substr(0, path.size() - std::strlen("as_built.json")) + c.expected, 0), 0u)
+        << c.json << " -> " << msg;
+  }
+  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -4,8 +4,8 @@
 /// @file
 /// @brief A simulated scenario written as a frame dump directory (what `plumb simulate` does): the
 ///        frames of sim::simulate_scenario() streamed to DIR/frames as they are made, then the wheel
-///        encoders, wheel odometry, IMU and ground truth (io/frame_dump.hpp). Also the LiDAR model
-///        file of `plumb simulate --lidar FILE.json`.
+///        encoders, wheel odometry, IMU, ground truth and the elements as built (io/frame_dump.hpp).
+///        Also the LiDAR model file of `plumb simulate --lidar FILE.json`.
 
 #include <cstddef>
 #include <functional>
@@ -34,7 +34,8 @@ io::FrameDumpMeta simulated_dump_meta(const sim::ScenarioPlan& plan, const sim::
 /// @brief Plan and run a scenario (sim::plan_scenario(), sim::simulate_scenario()), writing a frame
 ///        dump into `out_dir`: meta.json (simulated_dump_meta()), frames.csv and frames/NNNNNN.pcd
 ///        (one per LiDAR sweep, written as it is made), wheels.csv, odom.csv, imu.csv, gt.tum at the
-///        frame stamps and gt_dense.tum at robot.rate_hz.
+///        frame stamps, gt_dense.tum at robot.rate_hz and as_built.json (every element's true
+///        as-built displacement, sim::ScenarioRecording::as_built).
 /// @throws plumb::Error as sim::plan_scenario() (before anything is written), or when the dump cannot
 ///         be written (an existing dump without `settings.dump.overwrite`: before any frame is simulated).
 /// @note Deterministic for a seed, whatever num_threads.

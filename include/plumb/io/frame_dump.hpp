@@ -16,6 +16,8 @@
 /// DIR/imu.csv          stamp,wx,wy,wz,ax,ay,az angular rate [rad/s], specific force [m/s^2], IMU frame
 /// DIR/gt.tum           true T_world_base at the frame stamps (TUM)
 /// DIR/gt_dense.tum     true T_world_base, dense (TUM)
+/// DIR/as_built.json    simulated dumps: every BIM element's true as-built displacement
+///                      T_design_asbuilt (4x4 row-major, world frame), by global_id
 /// ```
 /// CSV files start with exactly that header line; `#` lines and blank lines are skipped; fields
 /// are separated by commas. Stamps are in seconds and must increase strictly within a file.
@@ -28,6 +30,7 @@
 
 #include <Eigen/Geometry>
 
+#include "plumb/core/as_built.hpp"
 #include "plumb/core/point_cloud.hpp"
 #include "plumb/core/pose2.hpp"
 #include "plumb/core/trajectory.hpp"
@@ -95,6 +98,7 @@ class FrameDumpWriter {
   void write_imu(const std::vector<ImuSample>& imu);              ///< imu.csv
   void write_ground_truth(const Trajectory& T_world_base);        ///< gt.tum
   void write_ground_truth_dense(const Trajectory& T_world_base);  ///< gt_dense.tum
+  void write_as_built(const std::vector<ElementDeviation>& elements);  ///< as_built.json
   /// @brief Flush and close frames.csv. @throws plumb::Error on a write error.
   void close();
 
@@ -132,11 +136,15 @@ class FrameDumpReader {
   bool has_imu() const;                ///< imu.csv exists
   bool has_ground_truth() const;       ///< gt.tum exists
   bool has_ground_truth_dense() const; ///< gt_dense.tum exists
+  bool has_as_built() const;           ///< as_built.json exists
   std::vector<WheelEncoderReading> wheels() const;   ///< @throws plumb::Error when absent or malformed
   std::vector<OdomSample> odometry() const;  ///< @throws plumb::Error when absent or malformed
   std::vector<ImuSample> imu() const;        ///< @throws plumb::Error when absent or malformed
   Trajectory ground_truth() const;           ///< @throws plumb::Error when absent or malformed
   Trajectory ground_truth_dense() const;     ///< @throws plumb::Error when absent or malformed
+  /// @brief The elements of as_built.json in file order.
+  /// @throws plumb::Error naming the file when absent, and file:line:column when malformed.
+  std::vector<ElementDeviation> as_built() const;
 
  private:
   std::string dir_;
@@ -171,5 +179,16 @@ std::string frame_dump_meta_json(const FrameDumpMeta& meta);
 ///         message names the key), a transform that is not rigid, or a lidar rate_hz that is neither
 ///         0 (unknown) nor in [0.1, 1000] Hz.
 FrameDumpMeta parse_frame_dump_meta(const std::string& text, const std::string& name = "meta.json");
+
+/// @brief as_built.json text for `elements` (what FrameDumpWriter::write_as_built writes):
+///        `{"elements": [{"global_id": ..., "type": ..., "T_design_asbuilt": [16 numbers]}, ...]}`,
+///        numbers written so that they read back exactly.
+std::string frame_dump_as_built_json(const std::vector<ElementDeviation>& elements);
+/// @brief Parse as_built.json text; `name` is used in messages.
+/// @throws plumb::Error `name:LINE:COL: message` on malformed JSON, a missing "elements" array or
+///         entry key, a value of the wrong kind, a number that is not finite, or a transform that is
+///         not rigid.
+std::vector<ElementDeviation> parse_frame_dump_as_built(const std::string& text,
+                                                        const std::string& name = "as_built.json");
 
 }  // namespace plumb::io

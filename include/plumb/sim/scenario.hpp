@@ -18,6 +18,7 @@
 
 #include "plumb/bim/floor_plan.hpp"
 #include "plumb/bim/mesh.hpp"
+#include "plumb/core/as_built.hpp"
 #include "plumb/core/point_cloud.hpp"
 #include "plumb/core/sensor_data.hpp"
 #include "plumb/core/trajectory.hpp"
@@ -104,6 +105,9 @@ struct ScenarioRecording {
   std::vector<ImuSample> imu;               ///< at imu.rate_hz, IMU frame
   Trajectory ground_truth;                  ///< true T_world_base at the frame stamps
   Trajectory ground_truth_dense;            ///< true T_world_base at robot.rate_hz
+  /// World::element_deviation() of every element of the planned model (ScenarioPlan::mesh; site:
+  /// the ground tiles too), in element order, with its global_id and type.
+  std::vector<ElementDeviation> as_built;
 };
 
 /// @brief Receives each LiDAR frame as soon as it is made, in order: its index, its stamp (start of
