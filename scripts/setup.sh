@@ -9,7 +9,7 @@ set -euo pipefail
 
 packages=(cmake g++ make libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev liblzf-dev zlib1g-dev
           libcli11-dev nlohmann-json3-dev ccache python3
-          python3-dev pybind11-dev python3-numpy python3-pytest python3-matplotlib)
+          python3-dev pybind11-dev python3-numpy python3-pytest python3-matplotlib libxml2-utils)
 for arg in "$@"; do
   case "$arg" in
     --fuzz) packages+=(clang libclang-rt-14-dev) ;;

@@ -9,23 +9,12 @@
 #include <sstream>
 
 #include "plumb/core/error.hpp"
+#include "xml_text.hpp"
 
 namespace plumb::io {
 namespace {
 
-std::string escape_xml(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
+using detail::xml_escape;
 
 std::string fmt(double v) {
   char buf[32];
@@ -86,7 +75,7 @@ std::string render_svg(const SvgPlot& plot) {
   o << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
   if (!plot.title.empty()) {
     o << "<text x=\"" << fmt(plot.margin_px) << "\" y=\"" << fmt(plot.margin_px * 0.6)
-      << "\" font-family=\"sans-serif\" font-size=\"16\">" << escape_xml(plot.title) << "</text>\n";
+      << "\" font-family=\"sans-serif\" font-size=\"16\">" << xml_escape(plot.title) << "</text>\n";
   }
   if (!plot.floor_plan.empty()) {
     o << "<g stroke=\"#888888\" stroke-width=\"1\">\n";
@@ -98,7 +87,7 @@ std::string render_svg(const SvgPlot& plot) {
   }
   for (const auto& path : plot.paths) {
     if (path.points.empty()) continue;
-    o << "<polyline fill=\"none\" stroke=\"" << escape_xml(path.color) << "\" stroke-width=\"" << fmt(path.width)
+    o << "<polyline fill=\"none\" stroke=\"" << xml_escape(path.color) << "\" stroke-width=\"" << fmt(path.width)
       << "\"" << (path.dashed ? " stroke-dasharray=\"6,4\"" : "") << " points=\"";
     for (std::size_t i = 0; i < path.points.size(); ++i) {
       o << (i ? " " : "") << fmt(X(path.points[i].x())) << ',' << fmt(Y(path.points[i].y()));
@@ -107,7 +96,7 @@ std::string render_svg(const SvgPlot& plot) {
     for (std::size_t m : path.markers) {
       if (m >= path.points.size()) continue;
       o << "<circle cx=\"" << fmt(X(path.points[m].x())) << "\" cy=\"" << fmt(Y(path.points[m].y()))
-        << "\" r=\"4\" fill=\"" << escape_xml(path.color) << "\"/>\n";
+        << "\" r=\"4\" fill=\"" << xml_escape(path.color) << "\"/>\n";
     }
   }
   // Legend, top right.
@@ -116,10 +105,10 @@ std::string render_svg(const SvgPlot& plot) {
     if (path.label.empty()) continue;
     const double lx = plot.width_px - plot.margin_px - 180.0;
     o << "<line x1=\"" << fmt(lx) << "\" y1=\"" << fmt(ly) << "\" x2=\"" << fmt(lx + 30) << "\" y2=\"" << fmt(ly)
-      << "\" stroke=\"" << escape_xml(path.color) << "\" stroke-width=\"3\""
+      << "\" stroke=\"" << xml_escape(path.color) << "\" stroke-width=\"3\""
       << (path.dashed ? " stroke-dasharray=\"6,4\"" : "") << "/>\n";
     o << "<text x=\"" << fmt(lx + 36) << "\" y=\"" << fmt(ly + 5)
-      << "\" font-family=\"sans-serif\" font-size=\"13\">" << escape_xml(path.label) << "</text>\n";
+      << "\" font-family=\"sans-serif\" font-size=\"13\">" << xml_escape(path.label) << "</text>\n";
     ly += 20.0;
   }
   // Scale bar, bottom left.
