@@ -191,6 +191,25 @@ py::array_t<double> poses_to_array(const std::vector<Eigen::Isometry3d>& poses) 
   return out;
 }
 
+Pose2 pose2_from_array(const py::handle& obj, const char* what) {
+  const auto arr = float_array<double>(obj, what, "a (3,) float array (x, y, theta)", 1, {3});
+  return Pose2{arr.data()[0], arr.data()[1], arr.data()[2]};
+}
+
+py::array_t<double> pose2_to_array(const Pose2& pose) {
+  py::array_t<double> out(py::ssize_t{3});
+  out.mutable_data()[0] = pose.x;
+  out.mutable_data()[1] = pose.y;
+  out.mutable_data()[2] = pose.theta;
+  return out;
+}
+
+py::array_t<double, py::array::c_style | py::array::forcecast> table_from_array(const py::handle& obj,
+                                                                                 const char* what, py::ssize_t cols) {
+  const std::string expected = "an (N, " + std::to_string(cols) + ") float32 or float64 array";
+  return float_array<double>(obj, what, expected.c_str(), 2, {cols});
+}
+
 PointCloud cloud_from_object(const py::handle& obj, const char* what) {
   if (py::isinstance<PointCloud>(obj)) return obj.cast<PointCloud>();
   PointCloud cloud;

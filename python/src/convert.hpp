@@ -17,6 +17,7 @@
 #include <pybind11/pybind11.h>
 
 #include "plumb/core/point_cloud.hpp"
+#include "plumb/core/pose2.hpp"
 #include "plumb/core/trajectory.hpp"
 #include "plumb/core/types.hpp"
 
@@ -53,6 +54,37 @@ py::array_t<double> pose_to_array(const Eigen::Isometry3d& pose);
 std::vector<Eigen::Isometry3d> poses_from_array(const py::handle& obj, const char* what);
 py::array_t<double> poses_to_array(const std::vector<Eigen::Isometry3d>& poses);
 
+/// @brief (3,) float array (x, y, theta) -> planar pose; planar pose -> a new (3,) float64 array.
+Pose2 pose2_from_array(const py::handle& obj, const char* what);
+py::array_t<double> pose2_to_array(const Pose2& pose);
+
+/// @brief (N, cols) float32 or float64 array -> a C-contiguous float64 array of that shape.
+py::array_t<double, py::array::c_style | py::array::forcecast> table_from_array(const py::handle& obj,
+                                                                                 const char* what, py::ssize_t cols);
+/// @brief Records -> a new (N, cols) float64 array; `fill(record, row)` writes the `cols` values of a row.
+template <typename Record, typename Fill>
+py::array_t<double> table_to_array(const std::vector<Record>& records, py::ssize_t cols, Fill fill) {
+  py::array_t<double> out({static_cast<py::ssize_t>(records.size()), cols});
+  double* dst = out.mutable_data();
+  for (std::size_t i = 0; i < records.size(); ++i) fill(records[i], dst + i * static_cast<std::size_t>(cols));
+  return out;
+}
+
+/// @brief A 4x4 float64 array property of a bound class for an isometry member (read-only, or
+///        read-write when `writable`: assigning checks the array as pose_from_array()).
+template <typename Class, typename... Options>
+void def_pose(py::class_<Class, Options...>& cls, const char* name, Eigen::Isometry3d Class::*member,
+              bool writable = false) {
+  auto get = [member](const Class& c) { return pose_to_array(c.*member); };
+  if (!writable) {
+    cls.def_property_readonly(name, get);
+    return;
+  }
+  cls.def_property(name, get, [member, name](Class& c, const py::object& value) {
+    c.*member = pose_from_array(value, name);
+  });
+}
+
 /// @brief A plumb.PointCloud (copied) or an (N, 3) point array (a cloud without fields).
 PointCloud cloud_from_object(const py::handle& obj, const char* what);
 
@@ -82,5 +114,9 @@ void bind_io(py::module_& m);
 void bind_algorithms(py::module_& m);
 void bind_registration(py::module_& m);
 void bind_eval(py::module_& m);
+void bind_dump(py::module_& m);
+void bind_bim(py::module_& m);
+void bind_pipeline(py::module_& m);
+void bind_app(py::module_& m);
 
 }  // namespace plumb::python

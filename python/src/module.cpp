@@ -14,4 +14,8 @@ PYBIND11_MODULE(_plumb, m) {
   plumb::python::bind_algorithms(m);
   plumb::python::bind_registration(m);
   plumb::python::bind_eval(m);
+  plumb::python::bind_dump(m);
+  plumb::python::bind_bim(m);
+  plumb::python::bind_pipeline(m);
+  plumb::python::bind_app(m);
 }

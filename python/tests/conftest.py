@@ -33,3 +33,22 @@ def run_cli():
         return subprocess.run([cli, *map(str, args)], capture_output=True, text=True, check=False)
 
     return run
+
+
+@pytest.fixture(scope="session")
+def demo_model():
+    """The demo office building shipped with the examples (IFC4)."""
+    return pathlib.Path(__file__).resolve().parents[2] / "examples" / "data" / "demo_office.ifc"
+
+
+@pytest.fixture(scope="session")
+def sim_run(tmp_path_factory, run_cli, demo_model):
+    """A short simulated drive through the demo office (`plumb simulate`, 4 m, about 100 frames) and
+    `plumb run` over it: (dump directory, run output directory)."""
+    root = tmp_path_factory.mktemp("sim")
+    dump, out = root / "dump", root / "run"
+    done = run_cli("simulate", demo_model, "-o", dump, "--length", 4, "--threads", 2)
+    assert done.returncode == 0, done.stderr
+    done = run_cli("run", dump, "--bim", demo_model, "-o", out, "--json")
+    assert done.returncode == 0, done.stderr
+    return dump, out

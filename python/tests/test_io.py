@@ -8,21 +8,7 @@ import numpy as np
 import pytest
 
 import plumb
-
-
-def pcd_header_and_data(path):
-    """(header dict, data bytes) of a PCD file, split at the DATA line."""
-    raw = pathlib.Path(path).read_bytes()
-    header, pos = {}, 0
-    while True:
-        end = raw.index(b"\n", pos)
-        line = raw[pos:end].decode().strip()
-        pos = end + 1
-        if line and not line.startswith("#"):
-            key, *values = line.split()
-            header[key] = values
-            if key == "DATA":
-                return header, raw[pos:]
+from pcd_numpy import pcd_header_and_data
 
 
 def test_read_pcd_binary_matches_numpy(data_path):

@@ -1,0 +1,125 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""The pipelines driven from Python against the plumb CLI on the same simulated dump: BimOdometry fed
+frame by frame and run_bim_odometry give `plumb run`'s bim.tum byte for byte (the odometry is
+deterministic and both write the poses with plumb's TUM writer); run_lio equals `plumb lio`."""
+
+import json
+import threading
+
+import numpy as np
+import pytest
+
+import plumb
+
+
+@pytest.fixture(scope="module")
+def building(demo_model):
+    mesh = plumb.read_ifc(demo_model)
+    return mesh, plumb.sample_bim_cloud(mesh, 0.05)
+
+
+def test_bim_odometry_frame_by_frame_equals_plumb_run(sim_run, building, tmp_path):
+    dump_dir, run_dir = sim_run
+    mesh, bim_cloud = building
+    dump = plumb.FrameDump(dump_dir)
+    T_base_lidar = dump.meta.T_base_lidar
+    odom = plumb.OdometryInterpolator(dump.odometry())
+    frames = ((stamp, plumb.deskew_frame(frame, stamp, T_base_lidar, odom)) for stamp, frame in dump)
+
+    stamp0, frame0 = next(frames)
+    start = plumb.BimLocalizer(mesh, bim_cloud).localize(frame0, T_base_lidar)
+    assert start.status == plumb.Status.ok
+    odometry = plumb.BimOdometry(bim_cloud, start.T_world_base, T_base_lidar=T_base_lidar)
+    trajectory = plumb.Trajectory(np.zeros((0, 4, 4)), np.zeros(0))
+    results = []
+    for stamp, frame in [(stamp0, frame0), *frames]:
+        r = odometry.process(frame, stamp, odom.at(stamp))
+        assert r.stamp == stamp
+        results.append(r)
+        trajectory.push_back(stamp, r.T_world_base)
+    np.testing.assert_array_equal(odometry.pose, results[-1].T_world_base)
+    assert sum(r.anchor.decision == plumb.AnchorDecision.accepted for r in results) > len(results) // 2
+
+    plumb.write_tum(trajectory, tmp_path / "bim.tum")
+    assert (tmp_path / "bim.tum").read_bytes() == (run_dir / "bim.tum").read_bytes()
+    report = json.loads((run_dir / "report.json").read_text())
+    assert report["frames"] == len(results)
+    assert report["anchors"]["accepted"] == sum(r.anchor.decision == plumb.AnchorDecision.accepted for r in results)
+
+
+def test_run_bim_odometry_equals_plumb_run(sim_run, demo_model, tmp_path):
+    dump_dir, run_dir = sim_run
+    report = plumb.run_bim_odometry(plumb.FrameDump(dump_dir), plumb.read_ifc(demo_model))
+    assert report.localized and report.localization_status == plumb.Status.ok and not report.partial
+    for name in ("bim", "lidar", "wheel"):
+        plumb.write_tum(getattr(report, name), tmp_path / f"{name}.tum")
+        assert (tmp_path / f"{name}.tum").read_bytes() == (run_dir / f"{name}.tum").read_bytes(), name
+    assert len(report.frames) == report.frames_requested == len(plumb.FrameDump(dump_dir))
+    assert report.has_ground_truth and [row.name for row in report.table] == ["P1", "P2", "end"]
+    # The report's APE against the truth, recomputed here with numpy.
+    truth = plumb.FrameDump(dump_dir).ground_truth().poses[:, :2, 3]
+    err = np.linalg.norm(report.bim.poses[:, :2, 3] - truth, axis=1)
+    assert report.ape_rmse_bim == pytest.approx(np.sqrt(np.mean(err**2)), rel=1e-9)
+    assert report.max_error_bim == pytest.approx(err.max(), rel=1e-12)
+
+
+def test_run_bim_odometry_settings_and_threads(sim_run, demo_model):
+    dump, mesh = plumb.FrameDump(sim_run[0]), plumb.read_ifc(demo_model)
+    truth0 = dump.ground_truth().poses[0]
+    # Two runs in Python threads (the GIL is released while they run) give the same trajectory.
+    reports = [None, None]
+
+    def run(k):
+        reports[k] = plumb.run_bim_odometry(dump, mesh, max_frames=20, initial_pose=truth0)
+
+    threads = [threading.Thread(target=run, args=(k,)) for k in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not reports[0].localized and len(reports[0].frames) == 20
+    np.testing.assert_array_equal(reports[0].T_world_base0, truth0)
+    np.testing.assert_array_equal(reports[0].bim.poses, reports[1].bim.poses)
+    with pytest.raises(TypeError, match="RunSettings"):
+        plumb.run_bim_odometry(dump, mesh, max_frame=3)
+
+
+def cli_lio_settings(dump):
+    """HybridLioSettings as `plumb lio` sets them by default (a map is started by 100 points or more)."""
+    settings = plumb.HybridLioSettings()
+    settings.features.min_init_points = 100
+    settings.features.image.vertical_angles_deg = list(np.degrees(dump.meta.lidar.elevations_rad))
+    settings.T_base_lidar = dump.meta.T_base_lidar
+    settings.T_base_imu = dump.meta.T_base_imu
+    return settings
+
+
+def test_run_lio_and_hybrid_lio_equal_plumb_lio(sim_run, run_cli, tmp_path):
+    dump_dir = sim_run[0]
+    frames = 30
+    done = run_cli("lio", dump_dir, "-o", tmp_path / "cli", "--max-frames", frames)
+    assert done.returncode == 0, done.stderr
+    expected = (tmp_path / "cli" / "trajectory.tum").read_bytes()
+    dump = plumb.FrameDump(dump_dir)
+    settings = cli_lio_settings(dump)
+
+    report = plumb.run_lio(dump, max_frames=frames, lio=settings)
+    plumb.write_tum(report.trajectory, tmp_path / "run_lio.tum")
+    assert (tmp_path / "run_lio.tum").read_bytes() == expected
+    assert report.frames_in(plumb.LioFrameMode.loam) == frames - 1
+
+    # The same loop in Python: the IMU up to the end of each frame's sweep (plus 20 ms), then the frame.
+    lio = plumb.HybridLio(dump.ground_truth().poses[0], settings=settings)
+    imu, next_imu, sweep = dump.imu(), 0, 1.0 / dump.meta.lidar.rate_hz
+    trajectory = plumb.Trajectory(np.zeros((0, 4, 4)), np.zeros(0))
+    for i in range(frames):
+        stamp = dump.stamp(i)
+        while next_imu < len(imu) and imu[next_imu, 0] <= stamp + sweep + 0.02:
+            assert lio.add_imu(imu[next_imu, 0], imu[next_imu, 1:4], imu[next_imu, 4:7]) == plumb.Status.ok
+            next_imu += 1
+        r = lio.process(dump.frame(i), stamp)
+        assert r.mode == (plumb.LioFrameMode.init if i == 0 else plumb.LioFrameMode.loam)
+        trajectory.push_back(stamp, r.T_world_base)
+    plumb.write_tum(trajectory, tmp_path / "hybrid_lio.tum")
+    assert (tmp_path / "hybrid_lio.tum").read_bytes() == expected
+    np.testing.assert_array_equal(lio.T_world_base, trajectory.poses[-1])
