@@ -118,5 +118,7 @@ void bind_dump(py::module_& m);
 void bind_bim(py::module_& m);
 void bind_pipeline(py::module_& m);
 void bind_app(py::module_& m);
+void bind_features(py::module_& m);
+void bind_scan2d(py::module_& m);
 
 }  // namespace plumb::python

@@ -18,4 +18,6 @@ PYBIND11_MODULE(_plumb, m) {
   plumb::python::bind_bim(m);
   plumb::python::bind_pipeline(m);
   plumb::python::bind_app(m);
+  plumb::python::bind_features(m);
+  plumb::python::bind_scan2d(m);
 }
