@@ -31,6 +31,8 @@ struct RunOptions {
   std::string out_dir;
   bool json = false;
   bool no_bim = false;
+  bool as_built = false;
+  double tolerance = 0.02;
   bool gt_start = false;
   bool overwrite = false;
   std::size_t max_frames = 0;
@@ -48,6 +50,8 @@ void run(const RunOptions& o) {
   settings.max_frames = o.max_frames;
   settings.odometry.use_bim = !o.no_bim;
   settings.odometry.correct_every = o.correct_every;
+  settings.odometry.estimate_as_built = o.as_built;
+  settings.deviation_tolerance = o.tolerance;
   if (o.gt_start) {
     PLUMB_CHECK(dump.has_ground_truth(), o.dump_dir << ": --gt-start needs gt.tum in the dump");
     settings.initial_pose = dump.ground_truth().poses.front();
@@ -96,6 +100,12 @@ void register_run_command(CLI::App& app) {
   cmd->add_option("-o,--output", o->out_dir, "Output directory")->required();
   cmd->add_flag("--json", o->json, "Print the report as JSON");
   cmd->add_flag("--no-bim", o->no_bim, "Plain scan-matching odometry (no BIM corrections)");
+  cmd->add_flag("--as-built", o->as_built,
+                "Estimate each element's deviation from the design while driving and register to the "
+                "building as estimated; writes deviations.json and deviations.csv");
+  cmd->add_option("--tolerance", o->tolerance,
+                  "Construction tolerance the --as-built deviations are judged against [m] (default 0.02)")
+      ->check(CLI::PositiveNumber);
   cmd->add_flag("--gt-start", o->gt_start, "Start at the dump's first ground-truth pose instead of localizing");
   cmd->add_option("--start-hint", o->start_hint, "Rough start position X Y in the BIM frame (e.g. the room's centre)")
       ->expected(2);

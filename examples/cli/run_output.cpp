@@ -79,7 +79,8 @@ const std::vector<std::string>& frame_dump_names() {
 }
 
 const std::vector<std::string>& run_output_names() {
-  static const std::vector<std::string> names = {"report.json", "wheel.tum", "lidar.tum", "bim.tum", "trajectory.svg"};
+  static const std::vector<std::string> names = {"report.json",    "wheel.tum",      "lidar.tum",      "bim.tum",
+                                                 "trajectory.svg", "deviations.json", "deviations.csv"};
   return names;
 }
 
@@ -236,6 +237,59 @@ nlohmann::json run_report_json(const RunReport& r) {
   return j;
 }
 
+nlohmann::json deviations_json(const RunReport& r) {
+  nlohmann::json elements = nlohmann::json::array();
+  for (const DeviationReportRow& d : r.deviations) {
+    elements.push_back({{"global_id", d.global_id},
+                        {"type", d.type},
+                        {"name", d.name},
+                        {"storey", d.storey},
+                        {"observations", d.observations},
+                        {"normal", {d.normal.x(), d.normal.y(), d.normal.z()}},
+                        {"point", {d.point.x(), d.point.y(), d.point.z()}},
+                        {"offset_m", d.offset_m},
+                        {"sigma_m", d.sigma_m},
+                        {"rotation_deg", d.rotation_deg},
+                        {"status", deviation_status_name(d.status)}});
+  }
+  return {{"tolerance_m", r.deviation_tolerance}, {"elements", elements}};
+}
+
+namespace {
+
+/// A CSV field: quoted, with quotes doubled, when it holds a separator, a quote or a line break.
+std::string csv_field(const std::string& text) {
+  if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
+  std::string out = "\"";
+  for (char c : text) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + "\"";
+}
+
+void write_deviations(const RunReport& r, const std::string& out_dir) {
+  {
+    std::ofstream out(out_dir + "/deviations.json");
+    out << deviations_json(r).dump(2) << '\n';
+    PLUMB_CHECK(out.good(), out_dir << "/deviations.json: write error");
+  }
+  std::ofstream out(out_dir + "/deviations.csv");
+  out << "global_id,type,name,storey,observations,normal_x,normal_y,normal_z,point_x,point_y,point_z,offset_m,"
+         "sigma_m,rotation_deg,status\n";
+  char numbers[512];
+  for (const DeviationReportRow& d : r.deviations) {
+    std::snprintf(numbers, sizeof(numbers), "%zu,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f,%.5f,%.5f,%.4f", d.observations,
+                  d.normal.x(), d.normal.y(), d.normal.z(), d.point.x(), d.point.y(), d.point.z(), d.offset_m,
+                  d.sigma_m, d.rotation_deg);
+    out << csv_field(d.global_id) << ',' << csv_field(d.type) << ',' << csv_field(d.name) << ','
+        << csv_field(d.storey) << ',' << numbers << ',' << deviation_status_name(d.status) << '\n';
+  }
+  PLUMB_CHECK(out.good(), out_dir << "/deviations.csv: write error");
+}
+
+}  // namespace
+
 void check_localized(const RunReport& r, const io::FrameDumpReader& dump, const std::string& model_name) {
   if (r.localization_status != Status::kOk) {
     if (r.localization.ambiguous) {
@@ -262,6 +316,7 @@ void write_run_outputs(const RunReport& r, const nlohmann::json& report, const b
   io::write_tum(r.wheel, out_dir + "/wheel.tum");
   io::write_tum(r.lidar, out_dir + "/lidar.tum");
   io::write_tum(r.bim, out_dir + "/bim.tum");
+  if (!r.deviations.empty()) write_deviations(r, out_dir);
 
   io::SvgPlot plot;
   plot.title = title;

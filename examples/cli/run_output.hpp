@@ -60,6 +60,9 @@ const std::vector<std::string>& frame_dump_names();
 /// The entries `plumb run` writes.
 const std::vector<std::string>& run_output_names();
 
+/// @brief deviations.json of a run that estimated the as-built: the tolerance and one object per element.
+nlohmann::json deviations_json(const RunReport& r);
+
 /// The report as JSON (frames, localization, anchors, timings; Table 2 and APE with ground truth).
 nlohmann::json run_report_json(const RunReport& r);
 

@@ -112,10 +112,11 @@ std::optional<PointCloud> place_first_frame(const io::FrameDumpReader& dump, con
   return first_frame;
 }
 
-// BimOdometry over frames [0, n): the three trajectories, the counts and the timing of the report.
-void track_frames(const io::FrameDumpReader& dump, const OdometryInterpolator& odom, const FrameSource& frame_at,
-                  std::shared_ptr<const PointCloud> bim_cloud, std::optional<PointCloud> first_frame,
-                  const RunSettings& settings, RunReport& report) {
+// BimOdometry over frames [0, n): the three trajectories, the counts and the timing of the report,
+// and the deviation report when the as-built is estimated.
+void track_frames(const io::FrameDumpReader& dump, const bim::BimMesh& mesh, const OdometryInterpolator& odom,
+                  const FrameSource& frame_at, std::shared_ptr<const PointCloud> bim_cloud,
+                  std::optional<PointCloud> first_frame, const RunSettings& settings, RunReport& report) {
   const std::size_t n = report.frames_requested;
   BimOdometrySettings os = settings.odometry;
   os.T_base_lidar = dump.meta().T_base_lidar;
@@ -147,6 +148,10 @@ void track_frames(const io::FrameDumpReader& dump, const OdometryInterpolator& o
     if (settings.progress) settings.progress(i + 1, n);
   }
   report.seconds_frames = seconds_since(t_frames);
+  if (odometry.as_built() != nullptr) {
+    report.deviation_tolerance = settings.deviation_tolerance;
+    report.deviations = deviation_report(*odometry.as_built(), mesh, settings.deviation_tolerance);
+  }
   const std::size_t m = report.frames.size();  // n, or fewer when the run stopped early
   report.frames_per_second = report.seconds_frames > 0 ? static_cast<double>(m) / report.seconds_frames : 0.0;
   for (const BimFrameResult& f : report.frames) {
@@ -223,6 +228,8 @@ RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& 
   PLUMB_CHECK(dump.num_frames() > 0, dump.dir() << ": the dump has no frame");
   PLUMB_CHECK(dump.has_odometry(), dump.dir() << ": the dump has no odom.csv (wheel odometry is the front end's prior)");
   PLUMB_CHECK(mesh.num_triangles() > 0, "run_bim_odometry: the model has no geometry");
+  PLUMB_CHECK(settings.deviation_tolerance > 0.0 && std::isfinite(settings.deviation_tolerance),
+              "run_bim_odometry: deviation_tolerance must be positive, got " << settings.deviation_tolerance);
   RunReport report;
   const OdometryInterpolator odom(dump.odometry());
   auto bim_cloud = std::make_shared<const PointCloud>(bim::sample_bim_cloud(mesh, settings.bim_spacing));
@@ -247,7 +254,7 @@ RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& 
   }
   if (report.localization_status != Status::kOk) return report;
 
-  track_frames(dump, odom, frame_at, std::move(bim_cloud), std::move(first_frame), settings, report);
+  track_frames(dump, mesh, odom, frame_at, std::move(bim_cloud), std::move(first_frame), settings, report);
   if (report.has_ground_truth) measure_against_truth(report, gt.poses);
   return report;
 }

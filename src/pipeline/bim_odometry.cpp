@@ -61,6 +61,10 @@ BimOdometry::BimOdometry(std::shared_ptr<const PointCloud> bim_cloud, const Eige
     PLUMB_CHECK(bim_->size() >= 100, "BimOdometry: the BIM cloud has " << bim_->size() << " points (need >= 100)");
     PLUMB_CHECK(bim_->has_normals(), "BimOdometry: the BIM cloud has no normals (sample it from the model's faces)");
     bim_tree_ = std::make_unique<KdTree3f>(bim_->points);
+    if (settings_.estimate_as_built) {
+      PLUMB_CHECK(settings_.as_built_refresh_every >= 1, "BimOdometry: as_built_refresh_every must be >= 1");
+      as_built_ = std::make_unique<AsBuiltMap>(*bim_, settings_.as_built);
+    }
   }
 }
 
@@ -127,7 +131,9 @@ void BimOdometry::correct(const PointCloud& lidar_frame, BimFrameResult& out) {
   const auto t1 = std::chrono::steady_clock::now();
   out.anchor_attempted = true;
   const Eigen::Isometry3d T_pred = composer_.pose() * settings_.T_base_lidar;
-  const IcpResult icp = align_icp(keys, *bim_, *bim_tree_, T_pred, settings_.icp);
+  IcpSettings icp_settings = settings_.icp;
+  icp_settings.keep_correspondences = as_built_ != nullptr;
+  const IcpResult icp = align_icp(keys, *bim_, *bim_tree_, T_pred, icp_settings);
   out.icp_status = icp.status;
   out.icp_overlap = icp.overlap;
   out.icp_inliers = icp.num_inliers;
@@ -174,6 +180,15 @@ void BimOdometry::correct(const PointCloud& lidar_frame, BimFrameResult& out) {
   T_c.translation() = c;
   const Matrix6d info_world = body_to_world_information(T_c, 0.5 * (H_kept + H_kept.transpose()));
   out.anchor = composer_.add_anchor(out.T_world_base_registered, info_world);
+  if (as_built_ != nullptr && out.anchor.decision == AnchorDecision::kAccepted) update_as_built(icp, c, out);
+}
+
+void BimOdometry::update_as_built(const IcpResult& icp, const Vector3d& robot_position, BimFrameResult& out) {
+  out.as_built_pairs = as_built_->observe(icp.correspondences, robot_position);
+  if (++anchors_since_refresh_ < settings_.as_built_refresh_every) return;
+  anchors_since_refresh_ = 0;
+  bim_ = std::make_shared<const PointCloud>(as_built_->corrected_cloud());
+  bim_tree_ = std::make_unique<KdTree3f>(bim_->points);
 }
 
 }  // namespace plumb

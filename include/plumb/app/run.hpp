@@ -38,6 +38,8 @@ struct RunSettings {
   double start_hint_radius = 3.0;   ///< [m]
   bool deskew = true;               ///< undo motion distortion with the wheel odometry and per-point times
   std::size_t max_frames = 0;       ///< 0 = all
+  /// Construction tolerance the as-built deviations are judged against (odometry.estimate_as_built) [m].
+  double deviation_tolerance = 0.02;
   std::function<void(std::size_t done, std::size_t total)> progress;  ///< called after each frame
 };
 
@@ -93,6 +95,9 @@ struct RunReport {
   /// as-built deviations (the simulator's walls are shifted and turned) this bounds the corrected pose.
   std::size_t registrations = 0;
   double registration_error_rms = 0.0, registration_error_max = 0.0;  ///< [m]
+  /// With odometry.estimate_as_built: the deviation report, one row per element of the BIM cloud.
+  std::vector<DeviationReportRow> deviations;
+  double deviation_tolerance = 0.0;     ///< the tolerance the rows were judged against [m]
 };
 
 /// @brief A frame dump's ground truth (gt.tum) for the frames a driver processes.

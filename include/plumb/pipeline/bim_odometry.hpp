@@ -22,6 +22,7 @@
 #include "plumb/core/point_cloud.hpp"
 #include "plumb/core/pose2.hpp"
 #include "plumb/core/types.hpp"
+#include "plumb/pipeline/as_built.hpp"
 #include "plumb/pipeline/pose_composer.hpp"
 #include "plumb/registration/icp.hpp"
 #include "plumb/scan2d/cloud_to_scan.hpp"
@@ -93,6 +94,12 @@ struct BimOdometrySettings {
     d << t * t, t * t, t * t, r * r, r * r, r * r;
     return Matrix6d(d.asDiagonal());
   }();
+  /// Estimate every element's as-built displacement while driving (AsBuiltMap, from the key points of
+  /// each accepted anchor) and register later frames to the elements as estimated. Needs the BIM
+  /// cloud's element labels (bim::sample_bim_cloud gives them).
+  bool estimate_as_built = false;
+  AsBuiltSettings as_built;               ///< the estimator's settings (construction tolerance, ...)
+  std::size_t as_built_refresh_every = 10;  ///< accepted anchors between updates of the registration target
 };
 
 /// @brief Covariance (x, y, θ; frame of the previous base pose) BimOdometry gives one front-end step.
@@ -124,6 +131,7 @@ struct BimFrameResult {
   bool registered = false;
   Eigen::Isometry3d T_world_base_registered = Eigen::Isometry3d::Identity();
   AnchorResult anchor;                  ///< the composer's decision (kIgnored when no anchor was made)
+  std::size_t as_built_pairs = 0;       ///< key-point pairs the as-built estimate took (estimate_as_built)
   double seconds_front_end = 0.0, seconds_segment = 0.0, seconds_icp = 0.0, seconds_total = 0.0;
 };
 
@@ -143,14 +151,21 @@ class BimOdometry {
   const Eigen::Isometry3d& pose() const { return composer_.pose(); }
   const PoseComposer& composer() const { return composer_; }
   const BimOdometrySettings& settings() const { return settings_; }
+  /// @brief The as-built estimate (null unless settings.estimate_as_built).
+  const AsBuiltMap* as_built() const { return as_built_.get(); }
 
  private:
   /// Registers the key points; fills the anchor fields of `out`.
   void correct(const PointCloud& lidar_frame, BimFrameResult& out);
+  /// The accepted anchor's pairs into the as-built estimate; every as_built_refresh_every anchors,
+  /// the registration target becomes the cloud as estimated.
+  void update_as_built(const IcpResult& icp, const Vector3d& robot_position, BimFrameResult& out);
 
   BimOdometrySettings settings_;
-  std::shared_ptr<const PointCloud> bim_;
+  std::shared_ptr<const PointCloud> bim_;  ///< the registration target: the design, or as estimated
   std::unique_ptr<KdTree3f> bim_tree_;
+  std::unique_ptr<AsBuiltMap> as_built_;
+  std::size_t anchors_since_refresh_ = 0;
   ScanOdometry front_end_;
   PoseComposer composer_;
   Eigen::Isometry3d T_world_base0_;

@@ -1,0 +1,319 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "plumb/pipeline/as_built.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Cholesky>
+#include <Eigen/SparseCholesky>
+
+#include "plumb/core/error.hpp"
+#include "plumb/search/kdtree.hpp"
+
+namespace plumb {
+namespace {
+
+/// Observations whose normals are within this angle of a face's mean normal belong to it.
+const double kFaceCos = std::cos(30.0 * kPi / 180.0);
+constexpr std::size_t kMaxFaces = 8;
+
+Matrix6d diagonal_information(double sigma_t, double sigma_r) {
+  Vector6d d;
+  d << Vector3d::Constant(1.0 / (sigma_t * sigma_t)), Vector3d::Constant(1.0 / (sigma_r * sigma_r));
+  return d.asDiagonal();
+}
+
+/// Row of a residual n.(p - ...) with respect to a motion (translation, rotation about `centre`).
+Vector6d motion_row(const Vector3d& n, const Vector3d& p, const Vector3d& centre) {
+  Vector6d a;
+  a << n, (p - centre).cross(n);
+  return a;
+}
+
+}  // namespace
+
+double ElementEstimate::displacement_sigma(const Vector3d& q, const Vector3d& direction) const {
+  const Vector6d h = motion_row(direction, q, pivot);
+  return std::sqrt(std::max(0.0, h.dot(covariance * h)));
+}
+
+double ElementEstimate::face_offset_sigma() const {
+  if (face_observations == 0) return std::sqrt(std::max(0.0, covariance(0, 0)));
+  return displacement_sigma(face_point, face_normal);
+}
+
+AsBuiltMap::AsBuiltMap(const PointCloud& design, const AsBuiltSettings& settings) : settings_(settings) {
+  const AsBuiltSettings& s = settings;
+  PLUMB_CHECK(s.sigma_translation > 0.0 && s.sigma_rotation > 0.0 && std::isfinite(s.sigma_translation) &&
+                  std::isfinite(s.sigma_rotation),
+              "AsBuiltMap: sigma_translation and sigma_rotation must be positive and finite");
+  PLUMB_CHECK(s.point_sigma > 0.0 && std::isfinite(s.point_sigma), "AsBuiltMap: point_sigma must be positive");
+  PLUMB_CHECK(s.max_points_per_element >= 1.0, "AsBuiltMap: max_points_per_element must be >= 1");
+  PLUMB_CHECK(s.pose_sigma_translation > 0.0 && s.pose_sigma_rotation > 0.0,
+              "AsBuiltMap: pose_sigma_translation and pose_sigma_rotation must be positive");
+  PLUMB_CHECK(s.max_residual > 0.0, "AsBuiltMap: max_residual must be positive");
+  PLUMB_CHECK(s.junction_radius >= 0.0 && std::isfinite(s.junction_radius),
+              "AsBuiltMap: junction_radius must be >= 0");
+  PLUMB_CHECK(s.decorrelation_distance >= 0.0 && std::isfinite(s.decorrelation_distance),
+              "AsBuiltMap: decorrelation_distance must be >= 0");
+  design.check_consistent("AsBuiltMap: design");
+  PLUMB_CHECK(design.has_normals(), "AsBuiltMap: the design cloud has no normals");
+  PLUMB_CHECK(design.has_labels(), "AsBuiltMap: the design cloud has no element labels");
+  design_ = design;
+  prior_information_ = diagonal_information(s.sigma_translation, s.sigma_rotation);
+  std::int32_t max_label = -1;
+  for (std::int32_t l : design.labels) {
+    PLUMB_CHECK(l >= 0, "AsBuiltMap: the design cloud has a negative element label " << l);
+    max_label = std::max(max_label, l);
+  }
+  elements_.resize(static_cast<std::size_t>(max_label + 1));
+  std::vector<std::size_t> count(elements_.size(), 0);
+  for (std::size_t i = 0; i < design.size(); ++i) {
+    const auto e = static_cast<std::size_t>(design.labels[i]);
+    elements_[e].pivot += design.points[i].cast<double>();
+    ++count[e];
+  }
+  junction_.assign(design.size(), false);
+  if (s.junction_radius > 0.0 && design.size() > 0) {
+    const KdTree3f tree(design.points);
+    std::vector<std::size_t> near;
+    std::vector<float> near_sq;
+    const auto r = static_cast<float>(s.junction_radius);
+    for (std::size_t i = 0; i < design.size(); ++i) {
+      tree.radius(design.points[i], r, near, near_sq, false);
+      for (std::size_t j : near) {
+        if (design.labels[j] != design.labels[i]) {
+          junction_[i] = true;
+          break;
+        }
+      }
+    }
+  }
+  information_.resize(elements_.size());
+  gradient_ = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(6 * elements_.size()));
+  for (std::size_t e = 0; e < elements_.size(); ++e) {
+    State& st = elements_[e];
+    st.present = count[e] > 0;
+    if (st.present) st.pivot /= static_cast<double>(count[e]);
+  }
+}
+
+struct AsBuiltMap::Solution {
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+  Eigen::VectorXd mean;
+};
+
+std::size_t AsBuiltMap::observe(const std::vector<IcpCorrespondence>& pairs, const Vector3d& robot_position) {
+  struct Pair {
+    std::size_t element;
+    Vector6d a, h;  // rows of the pose error and of the element's displacement
+    double z;       // n . (x - q), against the design
+    Vector3d n, q;
+  };
+  const Eigen::VectorXd& mu = mean();
+  std::vector<Pair> used;
+  used.reserve(pairs.size());
+  std::vector<std::size_t> per_element(elements_.size(), 0);
+  for (const IcpCorrespondence& c : pairs) {
+    if (c.target_index >= design_.size() || junction_[c.target_index]) continue;
+    const auto e = static_cast<std::size_t>(design_.labels[c.target_index]);
+    const Vector3d q = design_.points[c.target_index].cast<double>();
+    const Vector3d n = design_.normals[c.target_index].cast<double>().normalized();
+    if (!c.x.allFinite() || !n.allFinite()) continue;
+    const Vector6d h = motion_row(n, q, elements_[e].pivot);
+    const double z = n.dot(c.x - q);
+    // Gate on the residual against the element as estimated: farther pairs are clutter or another surface.
+    if (!(std::abs(z - h.dot(mu.segment<6>(static_cast<Eigen::Index>(6 * e)))) <= settings_.max_residual)) continue;
+    used.push_back({e, motion_row(n, c.x, robot_position), h, z, n, q});
+    ++per_element[e];
+  }
+  if (used.empty()) return 0;
+
+  // The frame's normal equations over its pose error and the displacements of the elements it saw,
+  // for the cost sum w (z + a.d_pose - h.delta_e)^2, at zero.
+  std::vector<std::size_t> seen;  // the elements of this frame, and each one's slot in it
+  std::vector<std::size_t> slot(elements_.size(), 0);
+  for (std::size_t e = 0; e < elements_.size(); ++e) {
+    if (per_element[e] == 0) continue;
+    slot[e] = seen.size();
+    seen.push_back(e);
+  }
+  const auto k = static_cast<Eigen::Index>(6 * seen.size());
+  Eigen::MatrixXd Hee = Eigen::MatrixXd::Zero(k, k), Hep = Eigen::MatrixXd::Zero(k, 6);
+  Eigen::VectorXd ge = Eigen::VectorXd::Zero(k);
+  Matrix6d Hpp = diagonal_information(settings_.pose_sigma_translation, settings_.pose_sigma_rotation);
+  Vector6d gp = Vector6d::Zero();
+  std::vector<double> viewpoint(elements_.size(), 1.0);  // how new this frame's view of each element is
+  for (std::size_t e : seen) {
+    const State& st = elements_[e];
+    if (!st.seen || settings_.decorrelation_distance <= 0.0) continue;
+    viewpoint[e] = std::min(1.0, (robot_position - st.last_position).norm() / settings_.decorrelation_distance);
+  }
+  const double w0 = 1.0 / (settings_.point_sigma * settings_.point_sigma);
+  for (const Pair& p : used) {
+    const double w = w0 * viewpoint[p.element] *
+                     std::min(1.0, settings_.max_points_per_element / static_cast<double>(per_element[p.element]));
+    const auto o = static_cast<Eigen::Index>(6 * slot[p.element]);
+    Hee.block<6, 6>(o, o).noalias() += w * p.h * p.h.transpose();
+    Hep.block<6, 6>(o, 0).noalias() -= w * p.h * p.a.transpose();
+    ge.segment<6>(o).noalias() -= w * p.z * p.h;
+    Hpp.noalias() += w * p.a * p.a.transpose();
+    gp.noalias() += w * p.z * p.a;
+  }
+  // Eliminate the pose error: the elements' information is what remains once it is unknown.
+  const Eigen::LDLT<Matrix6d> S(Hpp);
+  const Eigen::MatrixXd SinvHpe = S.solve(Hep.transpose());
+  const Eigen::MatrixXd H = Hee - Hep * SinvHpe;
+  const Eigen::VectorXd g = ge - SinvHpe.transpose() * gp;
+  for (std::size_t i = 0; i < seen.size(); ++i) {
+    const auto oi = static_cast<Eigen::Index>(6 * i);
+    gradient_.segment<6>(static_cast<Eigen::Index>(6 * seen[i])) += g.segment<6>(oi);
+    for (std::size_t j = i; j < seen.size(); ++j) {
+      const auto oj = static_cast<Eigen::Index>(6 * j);
+      Matrix6d block = H.block<6, 6>(oi, oj);
+      if (i == j) block = 0.5 * (block + block.transpose()).eval();
+      auto [it, inserted] = information_[seen[i]].try_emplace(seen[j], block);
+      if (!inserted) it->second += block;
+    }
+  }
+  for (std::size_t e : seen) {
+    State& st = elements_[e];
+    st.observations += per_element[e];
+    ++st.frames;
+    st.seen = true;
+    st.last_position = robot_position;
+  }
+  for (const Pair& p : used) {
+    std::vector<Face>& faces = elements_[p.element].faces;
+    auto it = std::find_if(faces.begin(), faces.end(),
+                           [&](const Face& f) { return f.normal_sum.normalized().dot(p.n) > kFaceCos; });
+    if (it == faces.end()) {
+      if (faces.size() >= kMaxFaces) continue;
+      faces.emplace_back();
+      it = faces.end() - 1;
+    }
+    it->normal_sum += p.n;
+    it->point_sum += p.q;
+    ++it->count;
+  }
+  solution_.reset();
+  return used.size();
+}
+
+const AsBuiltMap::Solution& AsBuiltMap::solve() const {
+  if (solution_ != nullptr) return *solution_;
+  const auto n = static_cast<Eigen::Index>(6 * elements_.size());
+  std::vector<Eigen::Triplet<double>> triplets;
+  for (std::size_t e = 0; e < elements_.size(); ++e) {
+    for (int r = 0; r < 6; ++r) triplets.emplace_back(6 * e + r, 6 * e + r, prior_information_(r, r));
+    for (const auto& [f, block] : information_[e]) {
+      for (int r = 0; r < 6; ++r) {
+        for (int c = 0; c < 6; ++c) {
+          triplets.emplace_back(6 * e + r, 6 * f + c, block(r, c));
+          if (f != e) triplets.emplace_back(6 * f + c, 6 * e + r, block(r, c));
+        }
+      }
+    }
+  }
+  Eigen::SparseMatrix<double> A(n, n);
+  A.setFromTriplets(triplets.begin(), triplets.end());
+  auto solution = std::make_shared<Solution>();
+  solution->ldlt.compute(A);
+  PLUMB_CHECK(solution->ldlt.info() == Eigen::Success, "AsBuiltMap: the information matrix is not positive definite");
+  solution->mean = -solution->ldlt.solve(gradient_);
+  solution_ = solution;
+  return *solution_;
+}
+
+const Eigen::VectorXd& AsBuiltMap::mean() const { return solve().mean; }
+
+ElementEstimate AsBuiltMap::element(std::size_t e) const {
+  PLUMB_CHECK(e < elements_.size(), "AsBuiltMap::element: no element " << e << " (have " << elements_.size() << ")");
+  const State& st = elements_[e];
+  const Solution& sol = solve();
+  ElementEstimate out;
+  out.pivot = st.pivot;
+  out.mean = sol.mean.segment<6>(static_cast<Eigen::Index>(6 * e));
+  // The marginal covariance: the element's 6 columns of the inverse.
+  Eigen::MatrixXd unit = Eigen::MatrixXd::Zero(sol.mean.size(), 6);
+  unit.block<6, 6>(static_cast<Eigen::Index>(6 * e), 0).setIdentity();
+  const Eigen::MatrixXd columns = sol.ldlt.solve(unit);
+  out.covariance = columns.block<6, 6>(static_cast<Eigen::Index>(6 * e), 0);
+  out.covariance = 0.5 * (out.covariance + out.covariance.transpose()).eval();
+  out.observations = st.observations;
+  out.frames = st.frames;
+  const Face* best = nullptr;
+  for (const Face& f : st.faces) {
+    if (best == nullptr || f.count > best->count) best = &f;
+  }
+  if (best != nullptr) {
+    out.face_normal = best->normal_sum.normalized();
+    out.face_point = best->point_sum / static_cast<double>(best->count);
+    out.face_observations = best->count;
+  }
+  return out;
+}
+
+PointCloud AsBuiltMap::corrected_cloud() const {
+  const Eigen::VectorXd& mu = mean();
+  PointCloud out = design_;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    const auto e = static_cast<std::size_t>(out.labels[i]);
+    const Vector6d d = mu.segment<6>(static_cast<Eigen::Index>(6 * e));
+    if (d.isZero(0.0)) continue;
+    const Vector3d q = design_.points[i].cast<double>();
+    const Vector3d w = d.tail<3>();
+    out.points[i] = (q + d.head<3>() + w.cross(q - elements_[e].pivot)).cast<float>();
+    const Vector3d n = design_.normals[i].cast<double>();
+    out.normals[i] = (n + w.cross(n)).normalized().cast<float>();
+  }
+  return out;
+}
+
+const char* deviation_status_name(DeviationStatus s) {
+  switch (s) {
+    case DeviationStatus::kOk: return "ok";
+    case DeviationStatus::kDeviates: return "deviates";
+    case DeviationStatus::kUnobserved: return "unobserved";
+  }
+  return "unknown";
+}
+
+std::vector<DeviationReportRow> deviation_report(const AsBuiltMap& map, const bim::BimMesh& mesh, double tolerance_m) {
+  PLUMB_CHECK(tolerance_m > 0.0 && std::isfinite(tolerance_m),
+              "deviation_report: the tolerance must be positive, got " << tolerance_m);
+  PLUMB_CHECK(map.num_elements() <= mesh.elements.size(),
+              "deviation_report: the as-built map has " << map.num_elements() << " elements, the model "
+                                                          << mesh.elements.size());
+  std::vector<DeviationReportRow> rows;
+  for (std::size_t e = 0; e < map.num_elements(); ++e) {
+    if (!map.has_points(e)) continue;
+    const ElementEstimate est = map.element(e);
+    const bim::BimElement& el = mesh.elements[e];
+    DeviationReportRow d;
+    d.element = e;
+    d.global_id = el.global_id;
+    d.type = el.type;
+    d.name = el.name;
+    if (el.storey >= 0 && static_cast<std::size_t>(el.storey) < mesh.storeys.size()) {
+      d.storey = mesh.storeys[static_cast<std::size_t>(el.storey)].name;
+    }
+    d.observations = est.observations;
+    d.normal = est.face_normal;
+    d.point = est.face_point;
+    d.offset_m = est.face_offset();
+    d.sigma_m = est.face_offset_sigma();
+    d.rotation_deg = est.mean.tail<3>().norm() * 180.0 / kPi;
+    if (est.face_observations == 0 || d.sigma_m > 0.9 * map.settings().sigma_translation) {
+      d.status = DeviationStatus::kUnobserved;
+    } else if (std::abs(d.offset_m) - 3.0 * d.sigma_m > tolerance_m) {
+      d.status = DeviationStatus::kDeviates;
+    } else {
+      d.status = DeviationStatus::kOk;
+    }
+    rows.push_back(std::move(d));
+  }
+  return rows;
+}
+
+}  // namespace plumb
