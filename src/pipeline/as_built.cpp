@@ -30,6 +30,34 @@ Vector6d motion_row(const Vector3d& n, const Vector3d& p, const Vector3d& centre
   return a;
 }
 
+/// A key point paired with a design point of an element.
+struct Pair {
+  std::size_t element;
+  Vector6d a, h;  // rows of the pose error and of the element's displacement
+  double z;       // n . (x - q), against the design
+  double r;       // z against the element as estimated
+  Vector3d n, q;
+};
+
+/// Pairs of one element in one frame lie on one surface, up to noise: those farther than
+/// `distance` from the median residual of their element are clutter in front of it or another
+/// surface behind it (a chair at a column, the wall behind a door frame), not the element.
+void reject_outliers(std::vector<Pair>& pairs, std::size_t num_elements, double distance) {
+  std::vector<std::vector<double>> residuals(num_elements);
+  for (const Pair& p : pairs) residuals[p.element].push_back(p.r);
+  std::vector<double> median(num_elements, 0.0);
+  for (std::size_t e = 0; e < num_elements; ++e) {
+    std::vector<double>& v = residuals[e];
+    if (v.empty()) continue;
+    const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+    std::nth_element(v.begin(), mid, v.end());
+    median[e] = *mid;
+  }
+  pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
+                             [&](const Pair& p) { return std::abs(p.r - median[p.element]) > distance; }),
+              pairs.end());
+}
+
 }  // namespace
 
 double ElementEstimate::displacement_sigma(const Vector3d& q, const Vector3d& direction) const {
@@ -52,6 +80,7 @@ AsBuiltMap::AsBuiltMap(const PointCloud& design, const AsBuiltSettings& settings
   PLUMB_CHECK(s.pose_sigma_translation > 0.0 && s.pose_sigma_rotation > 0.0,
               "AsBuiltMap: pose_sigma_translation and pose_sigma_rotation must be positive");
   PLUMB_CHECK(s.max_residual > 0.0, "AsBuiltMap: max_residual must be positive");
+  PLUMB_CHECK(s.outlier_distance > 0.0, "AsBuiltMap: outlier_distance must be positive");
   PLUMB_CHECK(s.junction_radius >= 0.0 && std::isfinite(s.junction_radius),
               "AsBuiltMap: junction_radius must be >= 0");
   PLUMB_CHECK(s.decorrelation_distance >= 0.0 && std::isfinite(s.decorrelation_distance),
@@ -104,12 +133,6 @@ struct AsBuiltMap::Solution {
 };
 
 std::size_t AsBuiltMap::observe(const std::vector<IcpCorrespondence>& pairs, const Vector3d& robot_position) {
-  struct Pair {
-    std::size_t element;
-    Vector6d a, h;  // rows of the pose error and of the element's displacement
-    double z;       // n . (x - q), against the design
-    Vector3d n, q;
-  };
   const Eigen::VectorXd& mu = mean();
   std::vector<Pair> used;
   used.reserve(pairs.size());
@@ -122,11 +145,13 @@ std::size_t AsBuiltMap::observe(const std::vector<IcpCorrespondence>& pairs, con
     if (!c.x.allFinite() || !n.allFinite()) continue;
     const Vector6d h = motion_row(n, q, elements_[e].pivot);
     const double z = n.dot(c.x - q);
+    const double r = z - h.dot(mu.segment<6>(static_cast<Eigen::Index>(6 * e)));
     // Gate on the residual against the element as estimated: farther pairs are clutter or another surface.
-    if (!(std::abs(z - h.dot(mu.segment<6>(static_cast<Eigen::Index>(6 * e)))) <= settings_.max_residual)) continue;
-    used.push_back({e, motion_row(n, c.x, robot_position), h, z, n, q});
-    ++per_element[e];
+    if (!(std::abs(r) <= settings_.max_residual)) continue;
+    used.push_back({e, motion_row(n, c.x, robot_position), h, z, r, n, q});
   }
+  reject_outliers(used, elements_.size(), settings_.outlier_distance);
+  for (const Pair& p : used) ++per_element[p.element];
   if (used.empty()) return 0;
 
   // The frame's normal equations over its pose error and the displacements of the elements it saw,

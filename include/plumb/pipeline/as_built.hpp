@@ -53,7 +53,7 @@ namespace plumb {
 struct AsBuiltSettings {
   double sigma_translation = 0.01;  ///< construction tolerance, per axis [m] (prior of every element)
   double sigma_rotation = 0.2 * kPi / 180.0;  ///< construction tolerance, per axis [rad]
-  double point_sigma = 0.01;        ///< std of one key point's residual along its normal [m]
+  double point_sigma = 0.02;        ///< std of one key point's residual along its normal (range noise, unevenness) [m]
   /// The points of one element in one frame count as at most this many independent points.
   double max_points_per_element = 20.0;
   double pose_sigma_translation = 1.0;  ///< weak prior of a frame's pose error, per axis [m]
@@ -61,6 +61,9 @@ struct AsBuiltSettings {
   /// Largest |n . (x - q(mu))| [m] a pair may have to count: farther pairs are clutter or another
   /// surface, not the element moved by a construction tolerance.
   double max_residual = 0.08;
+  /// Pairs farther than this from the median residual of their element in the frame are not the
+  /// element (clutter in front of it, another surface behind it) [m].
+  double outlier_distance = 0.03;
   /// Design points within this distance of another element's points are at a junction (wall
   /// meets slab, column in a wall), where a key point's element is ambiguous: their pairs do not
   /// count [m].
@@ -68,7 +71,7 @@ struct AsBuiltSettings {
   /// An element's errors from one viewpoint repeat in the next frames (the same range biases, the
   /// same pose error): a frame counts in full only once the robot has moved this far since the
   /// element was last observed, in proportion before [m].
-  double decorrelation_distance = 0.5;
+  double decorrelation_distance = 2.0;
 };
 
 /// @brief One element's estimate.

@@ -1,0 +1,107 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The as-built estimate on a simulated run through the demo office, whose every element the
+// simulator displaced (sigma 1 cm / 0.2 deg; the truth is the dump's as_built.json): the
+// BIM-corrected trajectory improves on registering to the design, and the deviation report's
+// offsets match the true displacement of each element's face.
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include "plumb/app/run.hpp"
+#include "plumb/app/simulate.hpp"
+#include "plumb/bim/ifc.hpp"
+#include "plumb/io/frame_dump.hpp"
+#include "plumb/sim/scenario.hpp"
+#include "test_data.hpp"
+
+namespace {
+
+class AsBuiltRunTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    mesh_ = new plumb::bim::BimMesh(plumb::bim::build_mesh(
+        plumb::bim::read_ifc(std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc"),
+        plumb::bim::mesh_settings_with_spaces()));
+    dir_ = plumb::test::temp_path("as_built_dump_" + std::to_string(::getpid()));
+    std::filesystem::remove_all(dir_);
+    plumb::sim::ScenarioSettings s = plumb::sim::scenario_defaults(plumb::sim::ScenarioKind::kIndoor);
+    s.lidar = plumb::sim::lidar_preset("vlp16");
+    s.length = 45.0;
+    s.seed = 3;
+    plumb::simulate_to_dump(*mesh_, dir_, s);
+    design_ = new plumb::RunReport(run(false));
+    as_built_ = new plumb::RunReport(run(true));
+  }
+  static void TearDownTestSuite() {
+    delete design_;
+    delete as_built_;
+    std::filesystem::remove_all(dir_);
+    delete mesh_;
+    mesh_ = nullptr;
+  }
+  static plumb::RunReport run(bool as_built) {
+    const plumb::io::FrameDumpReader dump(dir_);
+    plumb::RunSettings settings;
+    settings.initial_pose = dump.ground_truth().poses.front();
+    settings.odometry.estimate_as_built = as_built;
+    return plumb::run_bim_odometry(dump, *mesh_, settings);
+  }
+  static plumb::bim::BimMesh* mesh_;
+  static std::string dir_;
+  static plumb::RunReport* design_;    ///< registered to the design
+  static plumb::RunReport* as_built_;  ///< with the as-built estimate
+};
+plumb::bim::BimMesh* AsBuiltRunTest::mesh_ = nullptr;
+std::string AsBuiltRunTest::dir_;
+plumb::RunReport* AsBuiltRunTest::design_ = nullptr;
+plumb::RunReport* AsBuiltRunTest::as_built_ = nullptr;
+
+TEST_F(AsBuiltRunTest, RegisteringToTheBuildingAsEstimatedBeatsTheDesign) {
+  const plumb::RunReport& design = *design_;
+  const plumb::RunReport& as_built = *as_built_;
+  ASSERT_TRUE(design.has_ground_truth);
+  ASSERT_FALSE(as_built.partial);
+  EXPECT_TRUE(design.deviations.empty());
+  EXPECT_FALSE(as_built.deviations.empty());
+  EXPECT_LT(as_built.registration_error_rms, 0.7 * design.registration_error_rms);
+  EXPECT_LT(as_built.ape_rmse_bim, 0.8 * design.ape_rmse_bim);
+  EXPECT_LT(as_built.ape_rmse_bim, 0.015);
+  EXPECT_GE(as_built.anchors_accepted, design.anchors_accepted);
+}
+
+TEST_F(AsBuiltRunTest, ReportedOffsetsMatchTheTrueDisplacements) {
+  const plumb::RunReport& r = *as_built_;
+  const plumb::io::FrameDumpReader dump(dir_);
+  std::map<std::string, Eigen::Isometry3d> truth;
+  for (const plumb::ElementDeviation& e : dump.as_built()) truth[e.global_id] = e.T_design_asbuilt;
+  std::vector<double> errors;
+  std::size_t observed = 0, within_3_sigma = 0, flagged = 0, flagged_right = 0;
+  for (const plumb::DeviationReportRow& row : r.deviations) {
+    ASSERT_EQ(truth.count(row.global_id), 1u) << row.global_id;
+    if (row.status == plumb::DeviationStatus::kUnobserved) continue;
+    const Eigen::Isometry3d& T = truth[row.global_id];
+    const double true_offset = row.normal.dot(T * row.point - row.point);
+    const double error = std::abs(row.offset_m - true_offset);
+    ++observed;
+    within_3_sigma += error <= 3.0 * row.sigma_m ? 1 : 0;
+    if (row.sigma_m <= 0.005) errors.push_back(error);
+    if (row.status == plumb::DeviationStatus::kDeviates) {
+      ++flagged;
+      flagged_right += std::abs(true_offset) > r.deviation_tolerance ? 1 : 0;
+    }
+  }
+  ASSERT_GE(errors.size(), 5u);
+  std::nth_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(errors.size() / 2), errors.end());
+  EXPECT_LE(errors[errors.size() / 2], 0.004);  // median
+  EXPECT_EQ(flagged_right, flagged);              // every flagged element deviates in truth
+  EXPECT_GE(within_3_sigma, observed * 8 / 10);   // the stated uncertainties hold
+}
+
+}  // namespace
