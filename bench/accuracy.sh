@@ -4,7 +4,9 @@
 # defaults (rfans32, two loops of the indoor route, as-built deviations σ 1 cm / 0.2°, furniture,
 # range noise, wheel errors, motion distortion), then `plumb run` with the first frame localized in
 # the building, and Table 2 of Liu et al. 2022 (end error of wheel odometry, LiDAR odometry and the
-# BIM-corrected odometry as % of the distance) against the exact ground truth as one markdown table.
+# BIM-corrected odometry as % of the distance) against the exact ground truth as one markdown table;
+# then the same runs with the as-built estimate (`plumb run --as-built`): the trajectory's errors,
+# and the deviation report's face offsets against the dump's as_built.json (the simulator's truth).
 #
 # usage: bash bench/accuracy.sh [PLUMB_BINARY] [OUT_DIR]
 #   PLUMB_BINARY  default build/rel/examples/plumb (a Release build: `cmake --build build/rel`)
@@ -32,6 +34,8 @@ run_building() {  # name model [hinted]
     extra=(--start-hint "$hx" "$hy")
   fi
   "$plumb" run "$out/$name/dump" --bim "$model" -o "$out/$name/run" --json "${extra[@]}" > "$out/$name/report.json" || true
+  "$plumb" run "$out/$name/dump" --bim "$model" -o "$out/$name/run_as_built" --as-built --json "${extra[@]}" \
+    > "$out/$name/report_as_built.json" || true
 }
 
 for name in demo_office AC20-FZK-Haus duplex; do mkdir -p "$out/$name"; done
@@ -60,4 +64,39 @@ for name in ("demo_office", "AC20-FZK-Haus", "duplex"):
           f" {100 * r['max_error_xy']['lidar']:.1f} / {100 * r['max_error_xy']['bim']:.1f} cm |"
           f" {100 * r['ape_rmse_xy']['lidar']:.1f} / {100 * r['ape_rmse_xy']['bim']:.1f} cm |"
           f" {100 * reg['rms']:.1f} / {100 * reg['max']:.1f} cm | {1 / r['mean_seconds_per_frame']['process']:.0f} |")
+PY
+
+python3 - "$out" <<'PY'
+import json, statistics, sys
+out = sys.argv[1]
+print()
+print("| building | max error BIM: design / as built | APE BIM: design / as built | registration rms: design / as built | end error BIM, as built | elements observed | offset error, median (sigma <= 5 mm) | deviates: flagged / right |")
+print("|---|---|---|---|---|---|---|---|")
+for name in ("demo_office", "AC20-FZK-Haus", "duplex"):
+    try:
+        d = json.load(open(f"{out}/{name}/report.json"))
+        a = json.load(open(f"{out}/{name}/report_as_built.json"))
+        rows = json.load(open(f"{out}/{name}/run_as_built/deviations.json"))
+        truth = {e["global_id"]: e["T_design_asbuilt"] for e in json.load(open(f"{out}/{name}/dump/as_built.json"))["elements"]}
+    except (OSError, ValueError, KeyError):
+        print(f"| {name} | run failed | | | | | | |"); continue
+    errors, observed, flagged, right = [], 0, 0, 0
+    for row in rows["elements"]:
+        if row["status"] == "unobserved":
+            continue
+        observed += 1
+        T, p, n = truth[row["global_id"]], row["point"], row["normal"]
+        moved = [sum(T[4 * i + j] * p[j] for j in range(3)) + T[4 * i + 3] - p[i] for i in range(3)]
+        true = sum(n[i] * moved[i] for i in range(3))
+        if row["sigma_m"] <= 0.005:
+            errors.append(abs(row["offset_m"] - true))
+        if row["status"] == "deviates":
+            flagged += 1
+            right += abs(true) > rows["tolerance_m"]
+    end = a["table"][-1]
+    med = f"{1000 * statistics.median(errors):.1f} mm ({len(errors)})" if errors else "–"
+    print(f"| {name} | {100 * d['max_error_xy']['bim']:.1f} / {100 * a['max_error_xy']['bim']:.1f} cm |"
+          f" {100 * d['ape_rmse_xy']['bim']:.2f} / {100 * a['ape_rmse_xy']['bim']:.2f} cm |"
+          f" {100 * d['registration_error_xy']['rms']:.2f} / {100 * a['registration_error_xy']['rms']:.2f} cm |"
+          f" {100 * end['bim']['error'] / end['distance']:.3f} % | {observed} of {len(rows['elements'])} | {med} | {flagged} / {right} |")
 PY
