@@ -7,6 +7,7 @@
 
 #include "plumb/version.hpp"
 
+#include "plumb/core/as_built.hpp"
 #include "plumb/core/clock.hpp"
 #include "plumb/core/deskew.hpp"
 #include "plumb/core/error.hpp"
@@ -46,6 +47,7 @@
 #include "plumb/segmentation/segment_frame.hpp"
 #include "plumb/segmentation/vertical_planes.hpp"
 
+#include "plumb/io/bcf.hpp"
 #include "plumb/io/calib_tuples.hpp"
 #include "plumb/io/carmen.hpp"
 #include "plumb/io/cloud_io.hpp"
@@ -103,6 +105,7 @@
 #include "plumb/sim/wheel_model.hpp"
 #include "plumb/sim/world.hpp"
 
+#include "plumb/pipeline/as_built.hpp"
 #include "plumb/pipeline/bim_localizer.hpp"
 #include "plumb/pipeline/bim_odometry.hpp"
 #include "plumb/pipeline/hybrid_lio.hpp"
