@@ -2,14 +2,17 @@
 # SPDX-License-Identifier: BSD-3-Clause
 # Install what plumb needs with apt, only what is missing (idempotent).
 #   scripts/setup.sh            build + test dependencies (also of the Python module: pybind11, numpy,
-#                               pytest; matplotlib for the plotting example)
+#                               pytest; matplotlib for the plotting example; ROS 1 rosbag and message
+#                               packages, which the tests use to write bags for `plumb import`)
 #   scripts/setup.sh --fuzz     also clang + libFuzzer (CI's fuzz step)
 #   scripts/setup.sh --peers    also the benchmark peers: PCL, Open3D, nanoflann
 set -euo pipefail
 
 packages=(cmake g++ make libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev liblzf-dev zlib1g-dev
           libcli11-dev nlohmann-json3-dev ccache python3
-          python3-dev pybind11-dev python3-numpy python3-pytest python3-matplotlib libxml2-utils)
+          python3-dev pybind11-dev python3-numpy python3-pytest python3-matplotlib libxml2-utils
+          libbz2-dev liblz4-dev
+          python3-rosbag python3-sensor-msgs python3-nav-msgs python3-tf2-msgs python3-geometry-msgs)
 for arg in "$@"; do
   case "$arg" in
     --fuzz) packages+=(clang libclang-rt-14-dev) ;;
