@@ -176,18 +176,19 @@ io::FrameDumpMeta dump_meta(const ImportOptions& o, const io::BagReader& bag, co
   });
   // The frames of the sensors: from their first messages.
   std::string lidar_frame, imu_frame;
+  bool have_lidar = false, have_imu = imu_ids.empty();
   std::vector<std::uint32_t> first_ids = lidar_ids;
   first_ids.insert(first_ids.end(), imu_ids.begin(), imu_ids.end());
   bag.read(first_ids, [&](const io::BagMessage& m) {
     const bool is_lidar = m.connection->topic == s.lidar;
-    std::string& frame = is_lidar ? lidar_frame : imu_frame;
-    if (frame.empty()) {
-      frame = decoding(m, 0, [&] {
-        return is_lidar ? io::decode_point_cloud2(m.data, m.size).header.frame_id
-                        : io::decode_imu(m.data, m.size).header.frame_id;
-      });
+    if (is_lidar && !have_lidar) {
+      lidar_frame = decoding(m, 0, [&] { return io::decode_point_cloud2(m.data, m.size).header.frame_id; });
+      have_lidar = true;
+    } else if (!is_lidar && !have_imu) {
+      imu_frame = decoding(m, 0, [&] { return io::decode_imu(m.data, m.size).header.frame_id; });
+      have_imu = true;
     }
-    return lidar_frame.empty() || (imu_frame.empty() && !imu_ids.empty());
+    return !(have_lidar && have_imu);
   });
   io::FrameDumpMeta meta;
   meta.T_base_lidar = extrinsic(o.T_base_lidar, tf, o.base_frame, lidar_frame, "--T-base-lidar", o.bag, s.T_base_lidar_from);

@@ -134,7 +134,7 @@ io::RosPointCloud2 decode(const std::string& message) {
 
 // Points of 32 bytes: y float32 at 0, x float64 at 8, z int16 at 16 [the raw value], reflectivity
 // uint8 at 18, channel uint16 at 20, t uint32 [ns] at 24, the rest padding; rows padded by 8 bytes.
-TEST(PointCloud2Test, PaddedFieldsInEitherByteOrderMatchTheValuesWritten) {
+TEST(RosPointCloud2Test, PaddedFieldsInEitherByteOrderMatchTheValuesWritten) {
   const std::vector<FieldSpec> fields = {{"y", 0, 7},  {"x", 8, 8},        {"z", 16, 3},
                                          {"reflectivity", 18, 2}, {"channel", 20, 4}, {"t", 24, 6}};
   std::mt19937 rng(3);
@@ -180,7 +180,7 @@ TEST(PointCloud2Test, PaddedFieldsInEitherByteOrderMatchTheValuesWritten) {
   }
 }
 
-TEST(PointCloud2Test, TheTimeFieldsOfTheDrivers) {
+TEST(RosPointCloud2Test, TheTimeFieldsOfTheDrivers) {
   // Velodyne: `time` float32 [s] since the stamp; intensity and ring by those names.
   Writer v;
   v.put(1.0f).put(2.0f).put(3.0f).put(40.0f).put<std::uint16_t>(7).put(0.025f);
@@ -205,7 +205,7 @@ TEST(PointCloud2Test, TheTimeFieldsOfTheDrivers) {
   EXPECT_FALSE(pc.cloud.has_times());
 }
 
-TEST(PointCloud2Test, InconsistentMessagesFailSayingWhy) {
+TEST(RosPointCloud2Test, InconsistentMessagesFailSayingWhy) {
   const std::vector<FieldSpec> xyz = {{"x", 0, 7}, {"y", 4, 7}, {"z", 8, 7}};
   const std::string data(24, '\0');
   expect_error([&] { decode(test::ros_point_cloud2(1, 0, 1, 2, {{"x", 0, 7}, {"y", 4, 7}}, false, 12, 24, data)); },
