@@ -39,6 +39,8 @@ int shell(const std::string& command) {
   return status != -1 && WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+// Every test of this suite is labelled slow (PLUMB_SLOW_TESTS): they run in one process, which
+// simulates the dump and writes each bag once for all of them.
 class ImportCliTest : public test::CliTest {
  protected:
   static void SetUpTestSuite() {
@@ -106,9 +108,6 @@ class ImportCliTest : public test::CliTest {
 };
 bool ImportCliTest::have_rosbag_ = false;
 std::string ImportCliTest::dir_;
-
-// The slow tests of this file (their own suite for the PLUMB_SLOW_TESTS pattern).
-class ImportCliSlowTest : public ImportCliTest {};
 
 TEST_F(ImportCliTest, EveryCompressionGivesBackTheDump) {
   const io::FrameDumpReader want(dump());
@@ -345,8 +344,8 @@ TEST_F(ImportCliTest, NeverWritesOverTheUsersFiles) {
   EXPECT_EQ(test::read_text(file), "mine");
 }
 
-// Slow (PLUMB_SLOW_TESTS): two LIO runs.
-TEST_F(ImportCliSlowTest, HybridLioOnTheImportedDumpFollowsTheOriginal) {
+// Two LIO runs.
+TEST_F(ImportCliTest, HybridLioOnTheImportedDumpFollowsTheOriginal) {
   constexpr int kFrames = 20;
   const std::string out = dir_ + "/imported_lio";
   const test::RunResult imported = import(bag("lz4", "pcd", kFrames), out);
