@@ -59,8 +59,9 @@ std::vector<std::uint32_t> topic_connections(const io::BagReader& bag, const std
     PLUMB_CHECK(c.type == type, bag.path() << ": topic " << topic << " has type " << c.type << ", expected " << type);
     const char* md5 = io::ros_known_md5sum(c.type);
     PLUMB_CHECK(md5 != nullptr && c.md5sum == md5,
-                bag.path() << ": topic " << topic << ": md5sum " << c.md5sum << " of " << c.type
-                           << " differs from the known " << (md5 ? md5 : "?")
+                bag.path() << ": topic " << topic << ": md5sum " << c.md5sum << " of " << c.type << " (connection "
+                           << c.id << ", from its first message) differs from the known "
+                           << (md5 ? md5 : "?")
                            << ": another version of the message, which plumb does not decode");
     ids.push_back(c.id);
   }

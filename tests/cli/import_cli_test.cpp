@@ -265,7 +265,8 @@ TEST_F(ImportCliTest, AnotherMessageVersionIsRefusedNamingTheTopic) {
   std::ofstream(bad, std::ios::binary) << bytes;
   const test::RunResult r = import(bad, dir_ + "/imported_md5");
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_NE(r.err.find("topic /points: md5sum 0000"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(bad + ": topic /points: md5sum 0000"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("from its first message) differs from the known " + md5), std::string::npos) << r.err;
 }
 
 TEST_F(ImportCliTest, DriverLayoutsVelodyneAndOuster) {
