@@ -57,6 +57,8 @@
 #include "plumb/io/pcd.hpp"
 #include "plumb/io/stamps.hpp"
 #include "plumb/io/ply.hpp"
+#include "plumb/io/ros_messages.hpp"
+#include "plumb/io/rosbag.hpp"
 #include "plumb/io/trajectory.hpp"
 #include "plumb/io/svg.hpp"
 #include "plumb/io/wheel_encoders.hpp"
