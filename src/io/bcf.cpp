@@ -39,6 +39,8 @@ bool is_uuid(std::string_view s) {
   return true;
 }
 
+}  // namespace
+
 bool is_ifc_guid(std::string_view s) {
   if (s.size() != 22) return false;
   for (char c : s) {
@@ -47,6 +49,8 @@ bool is_ifc_guid(std::string_view s) {
   }
   return true;
 }
+
+namespace {
 
 bool is_color(std::string_view s) {
   if (s.size() != 6 && s.size() != 8) return false;

@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include "bcf_check.hpp"
 #include "cli_runner.hpp"
 #include "io/xml_text.hpp"
 #include "plumb/core/error.hpp"
@@ -31,14 +32,7 @@ std::string bcf_dir(const std::string& name) {
   return dir;
 }
 
-/// Path of a program on PATH, empty when there is none.
-std::string program(const std::string& name) {
-  const test::RunResult r = test::run_program("/bin/sh", "-c 'command -v " + name + "'");
-  if (r.exit_code != 0) return {};
-  std::string path = r.out;
-  while (!path.empty() && (path.back() == '\n' || path.back() == '\r')) path.pop_back();
-  return path;
-}
+using test::program_path;
 
 BcfTopic topic(const std::string& title, const std::vector<BcfComponent>& components) {
   BcfTopic t;
@@ -74,7 +68,7 @@ BcfProject some_project() {
 // Python's zipfile reads the archive (CRCs checked), unzip -t tests it, and it holds exactly the
 // documented entries; writing the same project again gives the same bytes.
 TEST(BcfTest, TheArchiveReadsWithZipTools) {
-  const std::string python = program("python3");
+  const std::string python = program_path("python3");
   if (python.empty()) GTEST_SKIP() << "python3 not found";
   const std::string dir = bcf_dir("zip");
   const std::string path = dir + "/issues.bcf";
@@ -99,7 +93,7 @@ TEST(BcfTest, TheArchiveReadsWithZipTools) {
   }
   EXPECT_EQ(guids.size(), 3u);
   EXPECT_EQ(names, expected);
-  const std::string unzip = program("unzip");
+  const std::string unzip = program_path("unzip");
   if (!unzip.empty()) {
     const test::RunResult t = test::run_program(unzip, "-t '" + path + "'");
     EXPECT_EQ(t.exit_code, 0) << t.out << t.err;
@@ -114,40 +108,19 @@ TEST(BcfTest, TheArchiveReadsWithZipTools) {
 
 // Every XML of the archive validates against its BCF 2.1 schema.
 TEST(BcfTest, EveryFileValidatesAgainstTheBcf21Schemas) {
-  const std::string xmllint = program("xmllint");
-  const std::string python = program("python3");
-  if (xmllint.empty() || python.empty()) GTEST_SKIP() << "xmllint or python3 not found";
-  const std::string schemas = std::string(PLUMB_DATA_DIR) + "/bcf/2.1";
-  if (!fs::exists(schemas + "/markup.xsd")) GTEST_SKIP() << "BCF schemas not found in " << schemas;
+  const std::string unavailable = test::bcf_check_unavailable();
+  if (!unavailable.empty()) GTEST_SKIP() << unavailable;
   const std::string dir = bcf_dir("schema");
   write_bcf(dir + "/issues.bcf", some_project());
-  const test::RunResult x = test::run_program(
-      python, "-c 'import sys, zipfile; zipfile.ZipFile(sys.argv[1]).extractall(sys.argv[2])' '" + dir +
-                  "/issues.bcf' '" + dir + "/x'");
-  ASSERT_EQ(x.exit_code, 0) << x.err;
-  std::size_t validated = 0;
-  for (const auto& e : fs::recursive_directory_iterator(dir + "/x")) {
-    if (!e.is_regular_file()) continue;
-    const std::string name = e.path().filename().string();
-    const std::string xsd = name == "bcf.version"      ? "version.xsd"
-                            : name == "project.bcfp"   ? "project.xsd"
-                            : name == "markup.bcf"     ? "markup.xsd"
-                            : name == "viewpoint.bcfv" ? "visinfo.xsd"
-                                                       : "";
-    ASSERT_FALSE(xsd.empty()) << "unexpected file " << e.path();
-    const test::RunResult v =
-        test::run_program(xmllint, "--noout --schema '" + schemas + "/" + xsd + "' '" + e.path().string() + "'");
-    EXPECT_EQ(v.exit_code, 0) << e.path() << ": " << v.err;
-    ++validated;
-  }
-  EXPECT_EQ(validated, 2u + 2u * 3u);
+  test::extract_bcf(dir + "/issues.bcf", dir + "/x");
+  EXPECT_EQ(test::expect_valid_bcf_files(dir + "/x"), 2u + 2u * 3u);
   fs::remove_all(dir);
 }
 
 // Titles, descriptions and the project name with & < > " ' read back as written, and the
 // viewpoint holds the components, colours and camera given.
 TEST(BcfTest, SpecialCharactersAndViewpointReadBack) {
-  const std::string python = program("python3");
+  const std::string python = program_path("python3");
   if (python.empty()) GTEST_SKIP() << "python3 not found";
   const std::string dir = bcf_dir("text");
   const BcfProject project = some_project();

@@ -3,6 +3,8 @@
 
 #include <cmath>
 #include <sstream>
+#include <string>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -88,6 +90,66 @@ TEST(SvgTest, EmptyPlotIsValidAndBadInputThrows) {
   narrow.width_px = 10;
   plumb::test::expect_error([&] { render_svg(narrow); }, {"width_px"});
   plumb::test::expect_error([&] { plumb::io::write_svg(SvgPlot{}, "/nonexistent/dir/p.svg"); }, {"/nonexistent/dir/p.svg"});
+}
+
+// The diverging scale: its three end and middle colours, linear in each channel between them
+// (+1 of 3: a third of the way from #F7F7F7 to #B2182B, rounded), clipped beyond the limit.
+TEST(SvgTest, DivergingColoursRunFromBlueThroughGreyToRed) {
+  using plumb::io::diverging_color;
+  EXPECT_EQ(diverging_color(-3.0, 3.0), "#2166AC");
+  EXPECT_EQ(diverging_color(0.0, 3.0), "#F7F7F7");
+  EXPECT_EQ(diverging_color(3.0, 3.0), "#B2182B");
+  EXPECT_EQ(diverging_color(1.0, 3.0), "#E0ADB3");
+  EXPECT_EQ(diverging_color(-1.0, 3.0), "#B0C7DE");  // 0x21 + (0xF7 - 0x21) * 2 / 3 = 175.7 -> 0xB0, ...
+  EXPECT_EQ(diverging_color(-90.0, 3.0), "#2166AC");
+  EXPECT_EQ(diverging_color(90.0, 3.0), "#B2182B");
+  const auto stops = plumb::io::diverging_color_stops(3.0);
+  ASSERT_EQ(stops.size(), 3u);
+  EXPECT_EQ(stops.front(), std::make_pair(-3.0, std::string("#2166AC")));
+  EXPECT_EQ(stops.back(), std::make_pair(3.0, std::string("#B2182B")));
+  plumb::test::expect_error([] { diverging_color(1.0, 0.0); }, {"limit"});
+  plumb::test::expect_error([] { diverging_color(NAN, 1.0); }, {"not finite"});
+}
+
+// A shape is one group with its id, class and tooltip, its segments in its colour (dashed when
+// asked, under an outline when given) and its markers as diamonds; the colour bar is a gradient
+// through the stops with the ticks in its range labelled, and stops that do not increase are refused.
+TEST(SvgTest, ShapesAndColourBar) {
+  SvgPlot plot;
+  plumb::io::SvgShape wall;
+  wall.id = "element-7";
+  wall.css_class = "element deviates";
+  wall.tooltip = "Wall <north> & co";
+  wall.color = "#B2182B";
+  wall.outline = "#000000";
+  wall.label = "north +4.0 cm";
+  wall.segments = {{Vector2d(0, 0), Vector2d(10, 0)}, {Vector2d(10, 0), Vector2d(10, 5)}};
+  plumb::io::SvgShape slab;
+  slab.color = "#BBBBBB";
+  slab.dashed = true;
+  slab.markers = {Vector2d(5, 2)};
+  plot.shapes = {wall, slab};
+  plot.color_bar.title = "offset [cm]";
+  plot.color_bar.stops = plumb::io::diverging_color_stops(3.0);
+  plot.color_bar.ticks = {-3.0, 0.0, 3.0, 7.0};
+  const std::string svg = render_svg(plot);
+  EXPECT_NE(svg.find("<g id=\"element-7\" class=\"element deviates\">\n<title>Wall &lt;north&gt; &amp; co</title>"),
+            std::string::npos);
+  EXPECT_NE(svg.find("<g stroke=\"#000000\" stroke-width=\"8.00\""), std::string::npos);
+  EXPECT_NE(svg.find("<g stroke=\"#B2182B\" stroke-width=\"4.00\">"), std::string::npos);
+  EXPECT_NE(svg.find(">north +4.0 cm</text>"), std::string::npos);
+  std::size_t lines = 0, polygons = 0;
+  for (std::size_t p = svg.find("<line x1"); p != std::string::npos; p = svg.find("<line x1", p + 1)) ++lines;
+  for (std::size_t p = svg.find("<polygon"); p != std::string::npos; p = svg.find("<polygon", p + 1)) ++polygons;
+  EXPECT_EQ(polygons, 1u);
+  EXPECT_NE(svg.find("fill=\"#BBBBBB\""), std::string::npos);
+  EXPECT_EQ(lines, 2u * 2u + 3u + 1u);  // outline and colour, three ticks in range, the scale bar
+  EXPECT_NE(svg.find("<stop offset=\"0.50\" stop-color=\"#F7F7F7\"/>"), std::string::npos);
+  EXPECT_NE(svg.find(">offset [cm]</text>"), std::string::npos);
+  for (const char* tick : {">-3</text>", ">0</text>", ">+3</text>"}) EXPECT_NE(svg.find(tick), std::string::npos) << tick;
+  EXPECT_EQ(svg.find(">+7</text>"), std::string::npos);
+  plot.color_bar.stops = {{1.0, "#000000"}, {1.0, "#FFFFFF"}};
+  plumb::test::expect_error([&] { render_svg(plot); }, {"do not increase"});
 }
 
 }  // namespace

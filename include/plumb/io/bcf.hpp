@@ -63,6 +63,10 @@ struct BcfProject {
 ///        same arguments give the same UUID, different ones (in practice) different UUIDs.
 std::string bcf_guid(std::uint64_t seed, std::string_view content);
 
+/// @brief True when `s` has the form of an IFC GlobalId (22 characters of 0-9 A-Z a-z _ $), the form
+///        BcfComponent::ifc_guid must have.
+bool is_ifc_guid(std::string_view s);
+
 /// @brief Write `project` as a BCF 2.1 archive at `path` (usually *.bcf). The archive is written to
 ///        a temporary file beside `path` and renamed onto it once complete, so that a failure
 ///        leaves no partial file and an existing file is replaced only by a complete archive.
