@@ -3,8 +3,9 @@
 // [--json]`: the whole product on the built-in sample. Writes the procedural demo office (IFC4), simulates a robot driving
 // two loops through it (rfans32 LiDAR, wheel encoders, IMU, as-built deviations, furniture, people),
 // localizes the first frame in the model (BimLocalizer, no hint; --surveyed-start starts at the
-// true pose instead), runs the BIM-corrected odometry and prints the error table of Liu et al. 2022,
-// Table 2 (wheel odometry, LiDAR without BIM, BIM-corrected) against the exact ground truth.
+// true pose instead), runs the BIM-corrected odometry with the as-built estimate (as `plumb run
+// --as-built`) and prints the error table of Liu et al. 2022, Table 2 (wheel odometry, LiDAR without
+// BIM, BIM-corrected) against the exact ground truth, and the elements that deviate from the model.
 // DIR receives demo_office.ifc, dump/ (the frame dump) and run/ (what `plumb run` writes). A DIR that
 // an earlier `plumb demo` filled is replaced; one holding anything else is refused unless --overwrite (OutputDir).
 
@@ -22,6 +23,7 @@
 #include "cli_support.hpp"
 #include "registry.hpp"
 #include "run_output.hpp"
+#include "plumb/app/deviation_files.hpp"
 #include "plumb/app/simulate.hpp"
 #include "plumb/bim/demo_building.hpp"
 #include "plumb/bim/ifc.hpp"
@@ -86,6 +88,9 @@ void run_demo(const DemoCommandOptions& o) {
   // The first frame is found in the model without any hint (BimLocalizer), unless the operator
   // gives the surveyed start pose.
   if (o.surveyed_start) rs.initial_pose = dump.ground_truth().poses.front();
+  // The building as built is estimated while driving: the odometry registers to it, and the run
+  // reports the elements that deviate from the model.
+  rs.odometry.estimate_as_built = true;
   if (!o.json) rs.progress = terminal_progress("plumb run");
   const RunReport r = run_bim_odometry(dump, mesh, rs);
   print_warnings(r.warnings);
@@ -100,13 +105,17 @@ void run_demo(const DemoCommandOptions& o) {
   if (o.json) {
     nlohmann::json all = j;
     all["simulation"] = {{"frames", sr.num_frames}, {"path_length", sr.path_length}, {"seconds", sr.wall_seconds}};
+    all["as_built"] = deviation_summary(r.deviations, r.deviation_tolerance);
     all["seconds"] = seconds_since(t0);
     std::cout << all.dump(2) << '\n';
     return;
   }
   say("BIM-corrected odometry done");
   print_run_summary(r);
+  std::printf("as built: %s\n", deviation_summary(r.deviations, r.deviation_tolerance).c_str());
   std::printf("wrote %s/{wheel,lidar,bim}.tum, report.json, trajectory.svg (open it in a browser)\n", run_dir.c_str());
+  std::printf("wrote %s/deviations.{json,csv}, deviations.svg (a browser) and deviations.bcf (a BCF viewer)\n",
+              run_dir.c_str());
   std::printf("demo done in %.1f s\n", seconds_since(t0));
 }
 

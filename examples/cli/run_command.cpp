@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // `plumb run DIR --bim MODEL.ifc -o OUT [--json]`: the BIM-corrected odometry over a frame dump.
 // Writes OUT/wheel.tum, OUT/lidar.tum, OUT/bim.tum (BIM frame, frame stamps), OUT/report.json and
-// OUT/trajectory.svg; with ground truth in the dump, prints the error table of Liu et al. 2022, Table 2.
+// OUT/trajectory.svg (with --as-built also OUT/deviations.{json,csv,svg,bcf}); with ground truth in
+// the dump, prints the error table of Liu et al. 2022, Table 2.
 // OUT is checked before any work and the set is replaced as a whole (OutputDir, run_output.hpp): a
 // directory with files plumb did not write is refused unless --overwrite. A frame failing after
 // others were processed still writes the set, report.json saying "partial": true, and exits 1.
@@ -19,6 +20,7 @@
 #include "cli_support.hpp"
 #include "registry.hpp"
 #include "run_output.hpp"
+#include "plumb/app/deviation_files.hpp"
 #include "plumb/bim/ifc.hpp"
 #include "plumb/core/error.hpp"
 
@@ -71,6 +73,10 @@ void run(const RunOptions& o) {
   } else {
     print_run_summary(r);
     std::printf("wrote %s/{wheel,lidar,bim}.tum, report.json, trajectory.svg\n", o.out_dir.c_str());
+    if (!r.deviations.empty()) {
+      std::printf("as built: %s\n", deviation_summary(r.deviations, r.deviation_tolerance).c_str());
+      std::printf("wrote %s/deviations.{json,csv,svg,bcf}\n", o.out_dir.c_str());
+    }
   }
   PLUMB_CHECK(!r.partial, o.dump_dir << ": stopped at " << r.error << "; wrote the " << r.frames.size() << " of "
                                      << r.frames_requested << " frames processed to " << o.out_dir
@@ -102,7 +108,7 @@ void register_run_command(CLI::App& app) {
   cmd->add_flag("--no-bim", o->no_bim, "Plain scan-matching odometry (no BIM corrections)");
   cmd->add_flag("--as-built", o->as_built,
                 "Estimate each element's deviation from the design while driving and register to the "
-                "building as estimated; writes deviations.json and deviations.csv");
+                "building as estimated; writes deviations.json, .csv, .svg (floor plan) and .bcf (issues for BIM viewers)");
   cmd->add_option("--tolerance", o->tolerance,
                   "Construction tolerance the --as-built deviations are judged against [m] (default 0.02)")
       ->check(CLI::PositiveNumber);

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <system_error>
 
+#include "plumb/app/deviation_files.hpp"
 #include "plumb/bim/sample.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/io/svg.hpp"
@@ -80,7 +81,8 @@ const std::vector<std::string>& frame_dump_names() {
 
 const std::vector<std::string>& run_output_names() {
   static const std::vector<std::string> names = {"report.json",    "wheel.tum",      "lidar.tum",      "bim.tum",
-                                                 "trajectory.svg", "deviations.json", "deviations.csv"};
+                                                 "trajectory.svg", "deviations.json", "deviations.csv",
+                                                 "deviations.svg", "deviations.bcf"};
   return names;
 }
 
@@ -268,6 +270,28 @@ std::string csv_field(const std::string& text) {
   return out + "\"";
 }
 
+/// The floor plans are the model cut 1 m above the start pose's base.
+double plan_height(const RunReport& r) { return r.T_world_base0.translation().z() + 1.0; }
+
+/// deviations.svg and deviations.bcf. The BCF topics are dated by the recording's start: the first
+/// frame's stamp read as Unix time (a simulated dump, stamped from 0, gives 1970-01-01T00:00:00Z).
+void write_deviation_views(const RunReport& r, const bim::BimMesh& mesh, const std::string& out_dir,
+                           const std::string& title, const std::string& model_name) {
+  DeviationSvgSettings svg;
+  svg.title = title;
+  svg.height = plan_height(r);
+  io::SvgPlot plot = deviation_svg(r.deviations, r.deviation_tolerance, mesh, svg);
+  plot.add_trajectory(r.bim, "robot path (BIM-corrected)", "#2ca02c", true);
+  plot.paths.back().width = 1.0;
+  io::write_svg(plot, out_dir + "/deviations.svg");
+  DeviationBcfSettings bcf;
+  bcf.project_name = fs::path(model_name).filename().string() + " as built";
+  const double start = r.bim.has_stamps() ? r.bim.stamps.front() : 0.0;
+  bcf.date = bcf_date_time(std::max(0.0, start));
+  bcf.origin_offset = mesh.origin_offset;
+  io::write_bcf(out_dir + "/deviations.bcf", deviation_bcf(r.deviations, r.deviation_tolerance, bcf));
+}
+
 void write_deviations(const RunReport& r, const std::string& out_dir) {
   {
     std::ofstream out(out_dir + "/deviations.json");
@@ -316,13 +340,15 @@ void write_run_outputs(const RunReport& r, const nlohmann::json& report, const b
   io::write_tum(r.wheel, out_dir + "/wheel.tum");
   io::write_tum(r.lidar, out_dir + "/lidar.tum");
   io::write_tum(r.bim, out_dir + "/bim.tum");
-  if (!r.deviations.empty()) write_deviations(r, out_dir);
+  if (!r.deviations.empty()) {
+    write_deviations(r, out_dir);
+    write_deviation_views(r, mesh, out_dir, title, model_name);
+  }
 
   io::SvgPlot plot;
   plot.title = title;
   if (!mesh.storeys.empty()) {
-    const double z = r.T_world_base0.translation().z() + 1.0;
-    const bim::FloorPlan fp = bim::slice_floor_plan(mesh, z);
+    const bim::FloorPlan fp = bim::slice_floor_plan(mesh, plan_height(r));
     for (std::size_t i = 0; i < fp.segment_start.size(); ++i) plot.floor_plan.push_back({fp.segment_start[i], fp.segment_end[i]});
   }
   if (r.has_ground_truth) plot.add_trajectory(dump.ground_truth(), "ground truth", "#000000", true);

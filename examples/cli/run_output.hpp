@@ -71,7 +71,9 @@ nlohmann::json run_report_json(const RunReport& r);
 void check_localized(const RunReport& r, const io::FrameDumpReader& dump, const std::string& model_name);
 
 /// Writes OUT/report.json, OUT/{wheel,lidar,bim}.tum and OUT/trajectory.svg (floor plan of the
-/// model at the robot's height, ground truth when present) into `out_dir` (an OutputDir's staging).
+/// model at the robot's height, ground truth when present) into `out_dir` (an OutputDir's staging);
+/// with deviations (--as-built) also deviations.json, deviations.csv, deviations.svg and
+/// deviations.bcf (app/deviation_files.hpp; the BCF dated by the first frame's stamp as Unix time).
 /// @throws plumb::Error on a write error, or when the localization failed (nothing written)
 void write_run_outputs(const RunReport& r, const nlohmann::json& report, const bim::BimMesh& mesh,
                        const io::FrameDumpReader& dump, const std::string& out_dir, const std::string& title,

@@ -1,21 +1,25 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // `plumb run` and `plumb demo` as a user runs them: a short simulated run in the demo office from
 // the surveyed start, the three trajectories against the exact ground truth; a dump without wheel
-// odometry and bad options fail with a clear message.
+// odometry and bad options fail with a clear message; `run --as-built` writes the deviation report
+// as JSON, CSV, a floor plan SVG and a BCF archive that validates against the BCF 2.1 schemas.
 #include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "bcf_check.hpp"
 #include "cli_runner.hpp"
 #include "plumb/io/frame_dump.hpp"
 #include "plumb/io/trajectory.hpp"
 #include "test_data.hpp"
+#include "test_util.hpp"
 
 namespace plumb {
 namespace {
@@ -136,6 +140,82 @@ TEST_F(CliTest, RunWithoutWheelOdometryOrWithBadOptionsFailsClearly) {
   std::filesystem::remove_all(out);
 }
 
+/// The viewpoint files of the archive `bcf`, one after the other, after validating every XML of it
+/// against the BCF 2.1 schemas; `topics` is set to the number of topics.
+std::string bcf_viewpoints(const std::string& bcf, std::size_t& topics) {
+  const std::string dir = bcf + "_x";
+  std::filesystem::remove_all(dir);
+  test::extract_bcf(bcf, dir);
+  topics = (test::expect_valid_bcf_files(dir) - 2) / 2;
+  std::string text;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(dir)) {
+    if (e.path().filename() == "viewpoint.bcfv") text += test::read_text(e.path().string());
+  }
+  std::filesystem::remove_all(dir);
+  return text;
+}
+
+// `run --as-built` writes deviations.{json,csv,svg,bcf}: the SVG has one shape per row of the JSON,
+// grey (dashed) for the unobserved ones; the BCF validates and has one topic per deviating row,
+// selecting that row's GlobalId. With a tolerance nothing exceeds, the BCF is still written, valid,
+// without topics. A user's deviations.bcf in OUT is refused and left as it was.
+TEST_F(CliTest, RunAsBuiltWritesTheFourDeviationFilesAndKeepsAUsersOwn) {
+  const std::string dump_dir = simulate_demo_dump("cli_run_as_built_dump", 4.0);
+  const std::string out = dump_dir + "_out";
+  const std::string run = "run '" + dump_dir + "' --bim '" + demo_model() + "' --gt-start --as-built -o ";
+  test::RunResult r = run_cli(run + "'" + out + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("wrote " + out + "/deviations.{json,csv,svg,bcf}"), std::string::npos) << r.out;
+  const Json rows = Json::parse(test::read_text(out + "/deviations.json")).at("elements");
+  ASSERT_FALSE(rows.empty());
+  EXPECT_EQ(count_lines(out + "/deviations.csv"), rows.size() + 1);
+  std::size_t unobserved = 0;
+  std::vector<std::string> deviating;
+  for (const Json& row : rows) {
+    unobserved += row.at("status") == "unobserved" ? 1 : 0;
+    if (row.at("status") == "deviates") deviating.push_back(row.at("global_id"));
+  }
+  EXPECT_NE(r.out.find("as built: " + std::to_string(rows.size() - unobserved) + " elements checked"), std::string::npos)
+      << r.out;
+  const std::string svg = test::read_text(out + "/deviations.svg");
+  std::size_t shapes = 0, grey = 0;
+  for (std::size_t at = svg.find("<g id=\"element-"); at != std::string::npos; at = svg.find("<g id=\"element-", at + 1)) {
+    ++shapes;
+    grey += svg.compare(svg.find("class=\"", at), 26, "class=\"element unobserved\"") == 0 ? 1 : 0;
+  }
+  EXPECT_EQ(shapes, rows.size());
+  EXPECT_EQ(grey, unobserved);
+  EXPECT_NE(svg.find("offset along the face normal [cm]"), std::string::npos);
+  const std::string unavailable = test::bcf_check_unavailable();
+  if (unavailable.empty()) {
+    std::size_t topics = 0;
+    const std::string viewpoints = bcf_viewpoints(out + "/deviations.bcf", topics);
+    EXPECT_EQ(topics, deviating.size());
+    for (const Json& row : rows) {
+      const std::string component = "<Component IfcGuid=\"" + row.at("global_id").get<std::string>() + "\"";
+      EXPECT_EQ(viewpoints.find(component) != std::string::npos, row.at("status") == "deviates") << row;
+    }
+    r = run_cli(run + "'" + out + "' --tolerance 1 --max-frames 5");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    bcf_viewpoints(out + "/deviations.bcf", topics);
+    EXPECT_EQ(topics, 0u);
+    EXPECT_NE(r.out.find("none deviates beyond 100 cm"), std::string::npos) << r.out;
+  }
+  // A user's file of the same name is refused before any work, and left alone.
+  const std::string foreign = dump_dir + "_foreign";
+  std::filesystem::remove_all(foreign);
+  std::filesystem::create_directories(foreign);
+  test::write_text(foreign + "/deviations.bcf", "a user's issues\n");
+  r = run_cli(run + "'" + foreign + "'");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("plumb did not write"), std::string::npos) << r.err;
+  EXPECT_EQ(test::read_text(foreign + "/deviations.bcf"), "a user's issues\n");
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(foreign), std::filesystem::directory_iterator()), 1);
+  std::filesystem::remove_all(dump_dir);
+  std::filesystem::remove_all(out);
+  std::filesystem::remove_all(foreign);
+}
+
 TEST_F(CliTest, DemoRunsTheWholeJobAndReportsTableTwo) {
   const std::string dir = test::temp_path("cli_demo_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
@@ -153,6 +233,18 @@ TEST_F(CliTest, DemoRunsTheWholeJobAndReportsTableTwo) {
   EXPECT_TRUE(std::filesystem::exists(dir + "/demo_office.ifc"));
   EXPECT_TRUE(std::filesystem::exists(dir + "/dump/gt.tum"));
   EXPECT_TRUE(std::filesystem::exists(dir + "/run/trajectory.svg"));
+  // ... with the as-built estimate: the deviation report beside the trajectory, summed up.
+  for (const char* name : {"json", "csv", "svg", "bcf"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir + "/run/deviations." + name)) << name;
+  }
+  const Json rows = Json::parse(test::read_text(dir + "/run/deviations.json")).at("elements");
+  std::size_t unobserved = 0;
+  for (const Json& row : rows) unobserved += row.at("status") == "unobserved" ? 1 : 0;
+  EXPECT_EQ(j.at("as_built").get<std::string>().rfind(std::to_string(rows.size() - unobserved) + " elements checked (" +
+                                                          std::to_string(unobserved) + " unobserved), ",
+                                                      0),
+            0u)
+      << j.at("as_built");
   std::filesystem::remove_all(dir);
 }
 
