@@ -113,6 +113,7 @@
 #include "plumb/pipeline/hybrid_lio.hpp"
 #include "plumb/pipeline/pose_composer.hpp"
 
+#include "plumb/app/deviation_files.hpp"
 #include "plumb/app/lio_run.hpp"
 #include "plumb/app/run.hpp"
 #include "plumb/app/simulate.hpp"
