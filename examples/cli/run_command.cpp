@@ -23,6 +23,7 @@
 #include "plumb/app/deviation_files.hpp"
 #include "plumb/bim/ifc.hpp"
 #include "plumb/core/error.hpp"
+#include "plumb/core/types.hpp"
 
 namespace plumb::cli {
 namespace {
@@ -35,6 +36,8 @@ struct RunOptions {
   bool no_bim = false;
   bool as_built = false;
   double tolerance = 0.02;
+  double as_built_sigma = 0.01;
+  double as_built_deg = 0.2;
   bool gt_start = false;
   bool overwrite = false;
   std::size_t max_frames = 0;
@@ -54,6 +57,8 @@ void run(const RunOptions& o) {
   settings.odometry.correct_every = o.correct_every;
   settings.odometry.estimate_as_built = o.as_built;
   settings.deviation_tolerance = o.tolerance;
+  settings.odometry.as_built.sigma_translation = o.as_built_sigma;
+  settings.odometry.as_built.sigma_rotation = o.as_built_deg * kPi / 180.0;
   if (o.gt_start) {
     PLUMB_CHECK(dump.has_ground_truth(), o.dump_dir << ": --gt-start needs gt.tum in the dump");
     settings.initial_pose = dump.ground_truth().poses.front();
@@ -112,6 +117,13 @@ void register_run_command(CLI::App& app) {
   cmd->add_option("--tolerance", o->tolerance,
                   "Construction tolerance the --as-built deviations are judged against [m] (default 0.02)")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--as-built-sigma", o->as_built_sigma,
+                  "How far elements may stand from the design, std dev per axis [m]: the --as-built estimate's "
+                  "prior (default 0.01)")
+      ->check(CLI::Range(1e-4, 1.0));
+  cmd->add_option("--as-built-deg", o->as_built_deg,
+                  "How far elements may be turned from the design, std dev about each axis [deg] (default 0.2)")
+      ->check(CLI::Range(1e-3, 10.0));
   cmd->add_flag("--gt-start", o->gt_start, "Start at the dump's first ground-truth pose instead of localizing");
   cmd->add_option("--start-hint", o->start_hint, "Rough start position X Y in the BIM frame (e.g. the room's centre)")
       ->expected(2);

@@ -201,6 +201,18 @@ TEST_F(CliTest, RunAsBuiltWritesTheFourDeviationFilesAndKeepsAUsersOwn) {
     EXPECT_EQ(topics, 0u);
     EXPECT_NE(r.out.find("none deviates beyond 100 cm"), std::string::npos) << r.out;
   }
+  // A wider construction tolerance (the estimate's prior) leaves every element less certain.
+  r = run_cli(run + "'" + out + "' --as-built-sigma 0.05 --as-built-deg 1");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Json wide = Json::parse(test::read_text(out + "/deviations.json")).at("elements");
+  ASSERT_EQ(wide.size(), rows.size());
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    EXPECT_EQ(wide[i].at("global_id"), rows[i].at("global_id"));
+    EXPECT_GT(wide[i].at("sigma_m").get<double>(), rows[i].at("sigma_m").get<double>()) << rows[i];
+  }
+  r = run_cli(run + "'" + out + "' --as-built-sigma 0");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("--as-built-sigma"), std::string::npos) << r.err;
   // A user's file of the same name is refused before any work, and left alone.
   const std::string foreign = dump_dir + "_foreign";
   std::filesystem::remove_all(foreign);
