@@ -12,7 +12,8 @@
 namespace {
 
 TEST(PipelineSettingsDefaultsTest, BimOdometryRegistersKeyPointsPointToPlaneFromAClosePose) {
-  const plumb::IcpSettings icp = plumb::BimOdometrySettings{}.icp;
+  const plumb::BimOdometrySettings settings;
+  const plumb::IcpSettings& icp = settings.icp;
   EXPECT_EQ(icp.method, plumb::IcpMethod::kPointToPlane);
   EXPECT_EQ(icp.max_correspondence_distance, 0.2);
   EXPECT_EQ(icp.distance_step, 0.05);

@@ -9,7 +9,8 @@
 namespace {
 
 TEST(LocalizeSettingsTest, FineStageIcpIsPointToPlaneWithAPartialOverlapGate) {
-  const plumb::IcpSettings icp = plumb::LocalizeSettings{}.icp;
+  const plumb::LocalizeSettings settings;
+  const plumb::IcpSettings& icp = settings.icp;
   EXPECT_EQ(icp.method, plumb::IcpMethod::kPointToPlane);
   EXPECT_EQ(icp.max_correspondence_distance, 0.6);
   EXPECT_EQ(icp.distance_step, 0.1);
