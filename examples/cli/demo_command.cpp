@@ -29,6 +29,7 @@
 #include "plumb/bim/ifc.hpp"
 #include "plumb/core/clock.hpp"
 #include "plumb/core/error.hpp"
+#include "plumb/core/parallel.hpp"
 #include "plumb/sim/scenario.hpp"
 
 namespace plumb::cli {
@@ -55,7 +56,7 @@ void run_demo(const DemoCommandOptions& o) {
   OutputDir run_out(o.out_dir + "/run", "run", run_output_names(), o.overwrite, true);
   const std::string dump_dir = dump_out.staging();
   const std::string run_dir = o.out_dir + "/run";
-  const int threads = o.threads > 0 ? o.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int threads = resolve_thread_count(o.threads);
   auto say = [&](const std::string& text) {
     if (!o.json) std::printf("[%5.1f s] %s\n", seconds_since(t0), text.c_str());
     std::fflush(stdout);
@@ -85,6 +86,7 @@ void run_demo(const DemoCommandOptions& o) {
 
   const io::FrameDumpReader dump(dump_dir);
   RunSettings rs;
+  rs.odometry.threads = threads;
   // The first frame is found in the model without any hint (BimLocalizer), unless the operator
   // gives the surveyed start pose.
   if (o.surveyed_start) rs.initial_pose = dump.ground_truth().poses.front();
@@ -131,7 +133,7 @@ void register_demo_command(CLI::App& app) {
       ->check(finite_number(1, 100))
       ->capture_default_str();
   cmd->add_option("--seed", o->seed, "Seed of the simulation")->check(non_negative_number())->capture_default_str();
-  cmd->add_option("--threads", o->threads, "Threads of the simulator (0 = all cores)")->check(finite_number(0, 256));
+  cmd->add_option("--threads", o->threads, "Threads of the simulator and the odometry (0 = every core; the same results for any count)")->check(finite_number(0, 256));
   cmd->add_flag("--surveyed-start", o->surveyed_start,
                 "Start at the true (surveyed) pose instead of localizing the first frame in the model");
   cmd->add_flag("--json", o->json, "Print the report as JSON");

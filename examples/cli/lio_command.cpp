@@ -25,6 +25,7 @@
 #include "run_output.hpp"
 #include "plumb/app/lio_run.hpp"
 #include "plumb/core/error.hpp"
+#include "plumb/core/parallel.hpp"
 #include "plumb/io/frame_dump.hpp"
 #include "plumb/io/trajectory.hpp"
 
@@ -41,6 +42,7 @@ struct LioOptions {
   std::size_t min_plane_points = 48;
   bool no_deskew = false;
   int map_window = 0;
+  int threads = 0;
   std::string icp_metric = to_string(HybridLioSettings{}.solver.icp_metric);
   bool icp_only = false;
 };
@@ -111,6 +113,7 @@ void run(const LioOptions& o) {
   if (o.icp_only) s.solver.icp_keep_loam = false;
   s.map.edge_map.max_age = s.map.plane_map.max_age = s.map.point_map.max_age = static_cast<std::size_t>(o.map_window);
   settings.max_frames = o.max_frames;
+  s.threads = resolve_thread_count(o.threads);
   const LioRunReport r = run_lio(dump, settings);
   print_warnings(r.warnings);
   const std::size_t done = r.frames.size();  // frames_requested, or fewer when a frame failed
@@ -162,6 +165,8 @@ void register_lio_command(CLI::App& app) {
   cmd->add_flag("--overwrite", o->overwrite,
                 "Write into a directory holding files plumb did not write (plumb's lio files in it are replaced)");
   // Unsigned options would take "-3" as a huge count: the checks reject negative input.
+  cmd->add_option("--threads", o->threads, "Threads (0 = every core; the results are the same for any count)")
+      ->check(CLI::Range(0, 256));
   cmd->add_option("--max-frames", o->max_frames, "Process only the first N frames")->check(non_negative_number());
   cmd->add_option("--min-plane-points", o->min_plane_points, "Hybrid switch: fewer plane points off the ground -> ICP")
       ->capture_default_str()

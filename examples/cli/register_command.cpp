@@ -20,6 +20,7 @@
 #include "cli_support.hpp"
 #include "registry.hpp"
 #include "plumb/core/error.hpp"
+#include "plumb/core/parallel.hpp"
 #include "plumb/io/cloud_io.hpp"
 #include "plumb/registration/localize.hpp"
 
@@ -31,6 +32,7 @@ struct RegisterOptions {
   std::string target_path;
   double voxel = 0.0;  // 0 = from the target's extent
   std::uint64_t seed = 42;
+  int threads = 0;
   bool json = false;
 };
 
@@ -58,6 +60,7 @@ void run_register(const RegisterOptions& o) {
   const double voxel = o.voxel > 0.0 ? o.voxel : default_voxel(target, o.target_path);
   LocalizeSettings settings = localize_settings_for_voxel(voxel);
   settings.sac_ia.seed = o.seed;
+  settings.threads = resolve_thread_count(o.threads);
   const LocalizeResult r = localize_coarse_to_fine(source, target, settings);
   const Eigen::Matrix4d T = r.T_target_source.matrix();
   const double seconds = r.seconds_prepare + r.seconds_coarse + r.seconds_fine;
@@ -111,6 +114,8 @@ void register_register_command(CLI::App& app) {
   cmd->add_option("--voxel", opts->voxel, "Coarse voxel size [m] (default: 1/100 of the target's extent)")
       ->check(positive_number(1e4));
   cmd->add_option("--seed", opts->seed, "Random seed of SAC-IA (default 42)")->check(non_negative_number());
+  cmd->add_option("--threads", opts->threads, "Threads (0 = every core; the result is the same for any count)")
+      ->check(CLI::Range(0, 256));
   cmd->add_flag("--json", opts->json, "Print the result as JSON");
   cmd->callback([opts] { naming_inputs({opts->source_path, opts->target_path}, [&] { run_register(*opts); }); });
 }

@@ -23,6 +23,7 @@
 #include "plumb/app/deviation_files.hpp"
 #include "plumb/bim/ifc.hpp"
 #include "plumb/core/error.hpp"
+#include "plumb/core/parallel.hpp"
 #include "plumb/core/types.hpp"
 
 namespace plumb::cli {
@@ -44,6 +45,7 @@ struct RunOptions {
   std::size_t correct_every = 1;
   std::vector<double> start_hint;
   double start_hint_radius = 3.0;
+  int threads = 0;
 };
 
 void run(const RunOptions& o) {
@@ -55,6 +57,7 @@ void run(const RunOptions& o) {
   settings.max_frames = o.max_frames;
   settings.odometry.use_bim = !o.no_bim;
   settings.odometry.correct_every = o.correct_every;
+  settings.odometry.threads = resolve_thread_count(o.threads);
   settings.odometry.estimate_as_built = o.as_built;
   settings.deviation_tolerance = o.tolerance;
   settings.odometry.as_built.sigma_translation = o.as_built_sigma;
@@ -131,6 +134,8 @@ void register_run_command(CLI::App& app) {
       ->check(positive_number())
       ->capture_default_str();
   // Unsigned: the check rejects "-3", which would otherwise wrap to a huge count.
+  cmd->add_option("--threads", o->threads, "Threads (0 = every core; the results are the same for any count)")
+      ->check(CLI::Range(0, 256));
   cmd->add_option("--max-frames", o->max_frames, "Process only the first N frames (0 = all)")
       ->check(non_negative_number());
   cmd->add_flag("--overwrite", o->overwrite,

@@ -26,6 +26,7 @@
 #include "plumb/bim/mesh.hpp"
 #include "plumb/bim/sample.hpp"
 #include "plumb/core/error.hpp"
+#include "plumb/core/parallel.hpp"
 #include "plumb/sim/scenario.hpp"
 
 namespace plumb::cli {
@@ -44,7 +45,7 @@ struct SimulateOptions {
   double as_built_sigma = 0.01;
   double as_built_deg = 0.2;
   std::string storey;  // name or index; empty = the largest walkable storey
-  int threads = 1;
+  int threads = 0;
   bool overwrite = false;
   bool compressed = false;
   bool json = false;
@@ -70,7 +71,7 @@ void run_simulate(const SimulateOptions& o) {
   s.world.clutter = o.clutter;
   s.world.as_built_sigma_m = o.as_built_sigma;
   s.world.as_built_sigma_rad = o.as_built_deg * M_PI / 180.0;
-  s.num_threads = o.threads;
+  s.num_threads = resolve_thread_count(o.threads);
   SimulateDumpSettings ds;
   ds.dump.overwrite = false;  // the staging directory is new
   if (o.compressed) ds.dump.encoding = io::PcdEncoding::kBinaryCompressed;
@@ -143,8 +144,8 @@ void register_simulate_command(CLI::App& app) {
                   "As-built element rotation about each axis, std dev [deg], at most 10 (default 0.2; 0 and "
                   "--as-built-sigma 0 = the exact model)")
       ->check(finite_number(0.0, 10.0));
-  cmd->add_option("--threads", opts->threads, "Frames simulated in parallel (default 1; same output for any)")
-      ->check(finite_number(1, 256));
+  cmd->add_option("--threads", opts->threads, "Frames simulated in parallel (0 = every core, the default; the same output for any count)")
+      ->check(finite_number(0, 256));
   cmd->add_flag("--compressed", opts->compressed, "Write PCD frames binary_compressed (LZF) instead of binary");
   cmd->add_flag("--overwrite", opts->overwrite,
                 "Write into a non-empty directory: every frame dump file in it is replaced (other files are kept)");

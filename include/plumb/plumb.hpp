@@ -14,6 +14,7 @@
 #include "plumb/core/laser_scan.hpp"
 #include "plumb/core/levenberg_marquardt.hpp"
 #include "plumb/core/lie.hpp"
+#include "plumb/core/parallel.hpp"
 #include "plumb/core/point_cloud.hpp"
 #include "plumb/core/pose2.hpp"
 #include "plumb/core/rng.hpp"

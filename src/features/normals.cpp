@@ -8,6 +8,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "plumb/core/error.hpp"
+#include "plumb/core/parallel.hpp"
 
 #include "core/eigen_instantiations.hpp"
 #include "features/normals_detail.hpp"
@@ -79,6 +80,7 @@ bool pca_normal(const std::vector<Vector3f>& pts, const std::size_t* idx, std::s
 NormalResult estimate_normals(const std::vector<Vector3f>& cloud, const KdTree<3>& tree,
                               const std::vector<Vector3f>& tree_points,
                               const NormalSettings& settings) {
+  PLUMB_CHECK(settings.threads >= 0, "estimate_normals: settings.threads = " << settings.threads << " must be >= 0");
   PLUMB_CHECK(settings.k >= 3, "estimate_normals: settings.k = " << settings.k << " must be >= 3");
   PLUMB_CHECK(!(settings.radius < 0.0f) && std::isfinite(settings.radius),
               "estimate_normals: settings.radius = " << settings.radius
@@ -94,57 +96,65 @@ NormalResult estimate_normals(const std::vector<Vector3f>& cloud, const KdTree<3
   const std::size_t k = settings.k;
   const float r2 = settings.radius * settings.radius;
   const bool hybrid = settings.radius > 0.0f;
-  // Buffers reused for every point (no allocation once they have grown).
-  std::vector<std::size_t> idx(k);
-  std::vector<float> d2(k);
-  std::vector<std::pair<float, std::size_t>> cand;
-  // Hybrid search strategy: a radius search costs in proportion to the points inside the ball, a
-  // k-nearest search in proportion to k. Use the radius search while the balls hold few points
-  // (at most 4k, judged from the previous point: neighbouring points have similar density), else
-  // k nearest then trimmed to the radius. Both give the same neighbours (the k nearest in radius).
-  bool use_radius = hybrid;
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const Vector3f& p = cloud[i];
-    if (!p.allFinite()) {
-      ++out.num_invalid;
-      continue;
-    }
-    std::size_t n = 0;
-    if (use_radius) {
-      const std::size_t m = tree.radius(p, settings.radius, idx, d2, /*sorted=*/false);
-      use_radius = m <= 4 * k;
-      if (m > k) {
-        cand.resize(m);
-        for (std::size_t j = 0; j < m; ++j) cand[j] = {d2[j], idx[j]};
-        std::nth_element(cand.begin(), cand.begin() + static_cast<std::ptrdiff_t>(k - 1),
-                         cand.end());
-        for (std::size_t j = 0; j < k; ++j) idx[j] = cand[j].second;
-        n = k;
+  // Points are independent: fixed chunks of them run on settings.threads threads, each writing
+  // its own points' outputs, so the result does not depend on the thread count.
+  constexpr std::size_t kGrain = 512;
+  std::vector<std::size_t> invalid(chunk_count(cloud.size(), kGrain), 0);
+  parallel_for(settings.threads, cloud.size(), kGrain, [&](std::size_t begin, std::size_t end) {
+    std::size_t& num_invalid = invalid[begin / kGrain];
+    // Buffers reused for every point (no allocation once they have grown).
+    std::vector<std::size_t> idx(k);
+    std::vector<float> d2(k);
+    std::vector<std::pair<float, std::size_t>> cand;
+    // Hybrid search strategy: a radius search costs in proportion to the points inside the ball, a
+    // k-nearest search in proportion to k. Use the radius search while the balls hold few points
+    // (at most 4k, judged from the previous point: neighbouring points have similar density), else
+    // k nearest then trimmed to the radius. Both give the same neighbours (the k nearest in radius).
+    bool use_radius = hybrid;
+    for (std::size_t i = begin; i < end; ++i) {
+      const Vector3f& p = cloud[i];
+      if (!p.allFinite()) {
+        ++num_invalid;
+        continue;
+      }
+      std::size_t n = 0;
+      if (use_radius) {
+        const std::size_t m = tree.radius(p, settings.radius, idx, d2, /*sorted=*/false);
+        use_radius = m <= 4 * k;
+        if (m > k) {
+          cand.resize(m);
+          for (std::size_t j = 0; j < m; ++j) cand[j] = {d2[j], idx[j]};
+          std::nth_element(cand.begin(), cand.begin() + static_cast<std::ptrdiff_t>(k - 1),
+                           cand.end());
+          for (std::size_t j = 0; j < k; ++j) idx[j] = cand[j].second;
+          n = k;
+        } else {
+          n = m;
+        }
       } else {
-        n = m;
+        if (idx.size() < k) {
+          idx.resize(k);
+          d2.resize(k);
+        }
+        n = tree.knn(p, k, idx.data(), d2.data());
+        if (hybrid) {
+          // sorted ascending; how many of the k nearest lie inside the ball tells the density
+          while (n > 0 && d2[n - 1] > r2) --n;
+          use_radius = n < k;
+        }
       }
-    } else {
-      if (idx.size() < k) {
-        idx.resize(k);
-        d2.resize(k);
+      Vector3f normal;
+      float curv = nan;
+      if (!detail::pca_normal(tree_points, idx.data(), n, normal, curv)) {
+        ++num_invalid;
+        continue;
       }
-      n = tree.knn(p, k, idx.data(), d2.data());
-      if (hybrid) {
-        // sorted ascending; how many of the k nearest lie inside the ball tells the density
-        while (n > 0 && d2[n - 1] > r2) --n;
-        use_radius = n < k;
-      }
+      if (settings.orient_to_viewpoint && normal.dot(settings.viewpoint - p) < 0.0f) normal = -normal;
+      out.normals[i] = normal;
+      out.curvature[i] = curv;
     }
-    Vector3f normal;
-    float curv = nan;
-    if (!detail::pca_normal(tree_points, idx.data(), n, normal, curv)) {
-      ++out.num_invalid;
-      continue;
-    }
-    if (settings.orient_to_viewpoint && normal.dot(settings.viewpoint - p) < 0.0f) normal = -normal;
-    out.normals[i] = normal;
-    out.curvature[i] = curv;
-  }
+  });
+  for (const std::size_t n : invalid) out.num_invalid += n;
   return out;
 }
 

@@ -11,6 +11,7 @@
 
 #include "plumb/core/error.hpp"
 #include "plumb/core/levenberg_marquardt.hpp"
+#include "plumb/core/parallel.hpp"
 #include "core/eigen_instantiations.hpp"
 #include "plumb/core/robust_kernel.hpp"
 
@@ -87,6 +88,7 @@ void check_settings(const LoamSettings& s, const Eigen::Isometry3d& guess, const
   PLUMB_CHECK(std::isfinite(s.max_correspondence_distance) && s.max_correspondence_distance > 0.0,
               where << ": max_correspondence_distance must be > 0, got " << s.max_correspondence_distance);
   PLUMB_CHECK(s.ring_window >= 1, where << ": ring_window must be >= 1, got " << s.ring_window);
+  PLUMB_CHECK(s.threads >= 0, where << ": threads must be >= 0 (0 = every core), got " << s.threads);
   PLUMB_CHECK(std::isfinite(s.huber_scale) && s.huber_scale >= 0.0,
               where << ": huber_scale must be >= 0, got " << s.huber_scale);
   PLUMB_CHECK(s.min_step_translation >= 0.0 && s.min_step_rotation >= 0.0,
@@ -299,16 +301,18 @@ void loam_associate_map(const LoamMap& map, const LoamFeatures& cur, const Eigen
                                const LoamSettings& settings, std::vector<LoamCorrespondence>& factors) {
   using loam_detail::Factor;
   PLUMB_CHECK(settings.map_neighbors >= 3, "loam_associate_map: map_neighbors must be >= 3, got " << settings.map_neighbors);
+  PLUMB_CHECK(settings.threads >= 0, "loam_associate_map: threads must be >= 0 (0 = every core), got " << settings.threads);
   const float max_sq = static_cast<float>(settings.max_correspondence_distance * settings.max_correspondence_distance);
   const std::size_t k = static_cast<std::size_t>(settings.map_neighbors);
   const Eigen::Matrix3f R = T.linear().cast<float>();
   const Eigen::Vector3f t = T.translation().cast<float>();
-  std::size_t idx[64];
-  float d[64];
   const std::size_t kk = std::min<std::size_t>(k, 64);
+  // The queries are independent: chunks of them run on settings.threads threads, their factors
+  // appended in query order (the same list for any thread count).
+  constexpr std::size_t kGrain = 256;
   // Mean and covariance of the k neighbours, or false when one is too far.
-  auto fit = [&](const KdTree3f& tree, const PointCloud& cloud, const Vector3f& q, Vector3d& mean,
-                 Eigen::SelfAdjointEigenSolver<Matrix3d>& eig) {
+  auto fit = [&](const KdTree3f& tree, const PointCloud& cloud, const Vector3f& q, std::size_t* idx, float* d,
+                 Vector3d& mean, Eigen::SelfAdjointEigenSolver<Matrix3d>& eig) {
     const std::size_t found = tree.knn(q, kk, idx, d);
     if (found < kk || d[found - 1] > max_sq) return false;
     Matrix3d C;
@@ -316,33 +320,47 @@ void loam_associate_map(const LoamMap& map, const LoamFeatures& cur, const Eigen
     eig.computeDirect(C);
     return true;
   };
-  Vector3d mean;
-  Eigen::SelfAdjointEigenSolver<Matrix3d> eig;
   auto add_edges = [&](const PointCloud& queries) {
     if (!map.edge_tree()) return;
-    for (const Vector3f& p : queries.points) {
-      if (!p.allFinite()) continue;
-      if (!fit(*map.edge_tree(), map.edges(), R * p + t, mean, eig)) continue;
-      const Vector3d ev = eig.eigenvalues();  // ascending
-      if (!(ev(2) > 0.0) || ev(2) < settings.map_edge_ratio * ev(1)) continue;
-      factors.push_back({Factor::Kind::kEdge, p.cast<double>(), mean, eig.eigenvectors().col(2).normalized()});
-    }
+    parallel_append(settings.threads, queries.size(), kGrain, factors,
+                    [&](std::size_t begin, std::size_t end, std::vector<LoamCorrespondence>& out) {
+      std::size_t idx[64];
+      float d[64];
+      Vector3d mean;
+      Eigen::SelfAdjointEigenSolver<Matrix3d> eig;
+      for (std::size_t i = begin; i < end; ++i) {
+        const Vector3f& p = queries.points[i];
+        if (!p.allFinite()) continue;
+        if (!fit(*map.edge_tree(), map.edges(), R * p + t, idx, d, mean, eig)) continue;
+        const Vector3d ev = eig.eigenvalues();  // ascending
+        if (!(ev(2) > 0.0) || ev(2) < settings.map_edge_ratio * ev(1)) continue;
+        out.push_back({Factor::Kind::kEdge, p.cast<double>(), mean, eig.eigenvectors().col(2).normalized()});
+      }
+    });
   };
   auto add_planes = [&](const PointCloud& queries) {
     if (!map.plane_tree()) return;
-    for (const Vector3f& p : queries.points) {
-      if (!p.allFinite()) continue;
-      if (!fit(*map.plane_tree(), map.planes(), R * p + t, mean, eig)) continue;
-      const Vector3d ev = eig.eigenvalues();  // ascending
-      if (!(ev(1) > 0.0) || ev(1) < settings.map_plane_ratio * ev(0)) continue;
-      const Vector3d n = eig.eigenvectors().col(0).normalized();
-      bool flat = true;
-      for (std::size_t i = 0; i < kk && flat; ++i) {
-        flat = std::abs(n.dot(map.planes().points[idx[i]].cast<double>() - mean)) <= settings.map_plane_tolerance;
+    parallel_append(settings.threads, queries.size(), kGrain, factors,
+                    [&](std::size_t begin, std::size_t end, std::vector<LoamCorrespondence>& out) {
+      std::size_t idx[64];
+      float d[64];
+      Vector3d mean;
+      Eigen::SelfAdjointEigenSolver<Matrix3d> eig;
+      for (std::size_t i = begin; i < end; ++i) {
+        const Vector3f& p = queries.points[i];
+        if (!p.allFinite()) continue;
+        if (!fit(*map.plane_tree(), map.planes(), R * p + t, idx, d, mean, eig)) continue;
+        const Vector3d ev = eig.eigenvalues();  // ascending
+        if (!(ev(1) > 0.0) || ev(1) < settings.map_plane_ratio * ev(0)) continue;
+        const Vector3d n = eig.eigenvectors().col(0).normalized();
+        bool flat = true;
+        for (std::size_t j = 0; j < kk && flat; ++j) {
+          flat = std::abs(n.dot(map.planes().points[idx[j]].cast<double>() - mean)) <= settings.map_plane_tolerance;
+        }
+        if (!flat) continue;
+        out.push_back({Factor::Kind::kPlane, p.cast<double>(), mean, n});
       }
-      if (!flat) continue;
-      factors.push_back({Factor::Kind::kPlane, p.cast<double>(), mean, n});
-    }
+    });
   };
   add_edges(cur.edges);
   add_edges(cur.edge_candidates);

@@ -133,6 +133,7 @@ void BimOdometry::correct(const PointCloud& lidar_frame, BimFrameResult& out) {
   const Eigen::Isometry3d T_pred = composer_.pose() * settings_.T_base_lidar;
   IcpSettings icp_settings = settings_.icp;
   icp_settings.keep_correspondences = as_built_ != nullptr;
+  icp_settings.threads = settings_.threads;
   const IcpResult icp = align_icp(keys, *bim_, *bim_tree_, T_pred, icp_settings);
   out.icp_status = icp.status;
   out.icp_overlap = icp.overlap;

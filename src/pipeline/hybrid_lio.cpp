@@ -77,6 +77,7 @@ HybridLio::HybridLio(const Eigen::Isometry3d& T_world_base0, const HybridLioSett
   PLUMB_CHECK(T_world_base0.matrix().allFinite(), "HybridLio: the initial pose is not finite");
   PLUMB_CHECK(s.T_base_lidar.matrix().allFinite() && s.T_base_imu.matrix().allFinite(),
               "HybridLio: settings.T_base_lidar / T_base_imu are not finite");
+  PLUMB_CHECK(s.threads >= 0, "HybridLio: settings.threads must be >= 0 (0 = every core), got " << s.threads);
   const LioSolverSettings& so = s.solver;
   PLUMB_CHECK(so.max_iterations >= 1,
               "HybridLio: settings.solver.max_iterations must be >= 1, got " << so.max_iterations);
@@ -303,6 +304,7 @@ LoamSettings map_association_settings(const HybridLioSettings& set) {
   ls.map_plane_tolerance = set.solver.map_plane_tolerance;
   ls.map_edge_ratio = set.solver.map_edge_ratio;
   ls.map_plane_ratio = set.solver.map_plane_ratio;
+  ls.threads = set.threads;
   return ls;
 }
 

@@ -6,6 +6,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "plumb/core/parallel.hpp"
 #include "plumb/core/robust_kernel.hpp"
 
 namespace plumb::lio_detail {
@@ -71,31 +72,36 @@ std::size_t associate_distributions(const PointCloud& map, const KdTree3f& tree,
                                     const Eigen::Isometry3d& T_map_cur, const HybridLioSettings& set,
                                     std::vector<LoamCorrespondence>& corr) {
   const std::size_t k = static_cast<std::size_t>(set.solver.icp_neighbors);
-  std::size_t idx[64];
-  float d2[64];
   const double max_d = set.solver.max_correspondence_distance;
   const float max_sq = static_cast<float>(max_d * max_d);
   const Eigen::Matrix3f R = T_map_cur.linear().cast<float>();
   const Eigen::Vector3f t = T_map_cur.translation().cast<float>();
   const double var0 = set.solver.point_sigma * set.solver.point_sigma;
-  std::size_t pairs = 0;
-  for (const Vector3f& p : cur.points) {
-    if (!p.allFinite()) continue;
-    const std::size_t m = tree.knn(R * p + t, k, idx, d2, max_sq);
-    if (m < 3) continue;
-    Vector3d mean;
-    Matrix3d cov;
-    loam_neighbour_moments(map, idx, m, mean, cov);
-    Eigen::SelfAdjointEigenSolver<Matrix3d> eig;
-    eig.computeDirect(cov);
-    for (int a = 0; a < 3; ++a) {
-      const double lambda = std::max(eig.eigenvalues()(a), 0.0);
-      corr.push_back({LoamCorrespondence::Kind::kPlane, p.cast<double>(), mean, eig.eigenvectors().col(a),
-                      set.solver.plane_sigma / std::sqrt(lambda + var0)});
+  const std::size_t before = corr.size();
+  // Independent queries in fixed chunks, appended in point order: the same list on any thread count.
+  constexpr std::size_t kGrain = 256;
+  parallel_append(set.threads, cur.points.size(), kGrain, corr,
+                  [&](std::size_t begin, std::size_t end, std::vector<LoamCorrespondence>& out) {
+    std::size_t idx[64];
+    float d2[64];
+    for (std::size_t i = begin; i < end; ++i) {
+      const Vector3f& p = cur.points[i];
+      if (!p.allFinite()) continue;
+      const std::size_t m = tree.knn(R * p + t, k, idx, d2, max_sq);
+      if (m < 3) continue;
+      Vector3d mean;
+      Matrix3d cov;
+      loam_neighbour_moments(map, idx, m, mean, cov);
+      Eigen::SelfAdjointEigenSolver<Matrix3d> eig;
+      eig.computeDirect(cov);
+      for (int a = 0; a < 3; ++a) {
+        const double lambda = std::max(eig.eigenvalues()(a), 0.0);
+        out.push_back({LoamCorrespondence::Kind::kPlane, p.cast<double>(), mean, eig.eigenvectors().col(a),
+                       set.solver.plane_sigma / std::sqrt(lambda + var0)});
+      }
     }
-    ++pairs;
-  }
-  return pairs;
+  });
+  return (corr.size() - before) / 3;  // three residuals per matched point
 }
 
 JointProblem::JointProblem(const HybridLioSettings& set, const ImuPreintegration* pim, const ImuState& prior_mean,

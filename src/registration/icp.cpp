@@ -13,6 +13,7 @@
 
 #include "plumb/core/error.hpp"
 #include "plumb/core/lie.hpp"
+#include "plumb/core/parallel.hpp"
 #include "plumb/registration/horn.hpp"
 #include "plumb/registration/overlap.hpp"
 #include "plumb/search/neighbors.hpp"
@@ -46,6 +47,7 @@ void check_icp_settings(const IcpSettings& s) {
   PLUMB_CHECK(pos(s.kernel_scale), "align_icp: settings.kernel_scale = " << s.kernel_scale << " must be > 0");
   PLUMB_CHECK(s.min_correspondences >= 3,
               "align_icp: settings.min_correspondences = " << s.min_correspondences << " must be >= 3");
+  PLUMB_CHECK(s.threads >= 0, "align_icp: settings.threads = " << s.threads << " must be >= 0 (0 = every core)");
   PLUMB_CHECK(std::isfinite(s.degeneracy_threshold) && s.degeneracy_threshold >= 0.0,
               "align_icp: settings.degeneracy_threshold = " << s.degeneracy_threshold << " must be >= 0");
 }
@@ -153,59 +155,76 @@ double icp_pairs(const PointCloud& source, const PointCloud& target, const KdTre
   const bool point_to_plane = s.method == IcpMethod::kPointToPlane;
   const bool check_angle = source.has_normals() && target.has_normals() && s.max_normal_angle < 1.5707963;
   const float min_cos = static_cast<float>(std::cos(s.max_normal_angle));
-  double sum_sq = 0.0;
-  for (std::size_t i = 0; i < source.points.size(); ++i) {
-    const Vector3f& p = source.points[i];
-    if (!p.allFinite()) continue;
-    const Vector3f x = R * p + t;
-    std::uint32_t j = 0;
-    const float best = cached_nearest(target, tree, x, d_f, d_sq, cache[i], j);
-    if (!(best <= d_sq)) continue;
-    if (check_angle) {
-      const Vector3f& nt = target.normals[j];
-      const Vector3f& ns = source.normals[i];
-      // A missing normal on either side does not veto the pair (except where the metric needs it).
-      if (nt.allFinite() && ns.allFinite() && std::abs((R * ns).dot(nt)) < min_cos) continue;
+  // Each source point touches only its own cache entry: chunks of points are independent, and
+  // their pairs are appended in point order whatever the thread count.
+  parallel_append(s.threads, source.points.size(), kIcpGrain, pairs,
+                  [&](std::size_t begin, std::size_t end, std::vector<IcpPair>& out) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const Vector3f& p = source.points[i];
+      if (!p.allFinite()) continue;
+      const Vector3f x = R * p + t;
+      std::uint32_t j = 0;
+      const float best = cached_nearest(target, tree, x, d_f, d_sq, cache[i], j);
+      if (!(best <= d_sq)) continue;
+      if (check_angle) {
+        const Vector3f& nt = target.normals[j];
+        const Vector3f& ns = source.normals[i];
+        // A missing normal on either side does not veto the pair (except where the metric needs it).
+        if (nt.allFinite() && ns.allFinite() && std::abs((R * ns).dot(nt)) < min_cos) continue;
+      }
+      IcpPair pr;
+      pr.i = i;
+      pr.j = j;
+      pr.x = x.cast<double>();
+      pr.q = target.points[j].cast<double>();
+      if (point_to_plane) {
+        const Vector3f& nt = target.normals[j];
+        if (!nt.allFinite()) continue;
+        pr.n = nt.cast<double>();
+        const double r = pr.n.dot(pr.x - pr.q);
+        pr.r_sq = r * r;
+      } else {
+        pr.n.setZero();
+        pr.r_sq = static_cast<double>(best);
+      }
+      out.push_back(pr);
     }
-    IcpPair pr;
-    pr.i = i;
-    pr.j = j;
-    pr.x = x.cast<double>();
-    pr.q = target.points[j].cast<double>();
-    if (point_to_plane) {
-      const Vector3f& nt = target.normals[j];
-      if (!nt.allFinite()) continue;
-      pr.n = nt.cast<double>();
-      const double r = pr.n.dot(pr.x - pr.q);
-      sum_sq += r * r;
-    } else {
-      pr.n.setZero();
-      sum_sq += static_cast<double>(best);
-    }
-    pairs.push_back(pr);
-  }
+  });
+  double sum_sq = 0.0;  // in pair order: the same sum on any thread count
+  for (const IcpPair& pr : pairs) sum_sq += pr.r_sq;
   return pairs.empty() ? 0.0 : sum_sq / static_cast<double>(pairs.size());
 }
 
 /// overlap_ratio() of the source under T through the ICP's neighbour cache: the same result (see
 /// cached_nearest), without a kd-tree query for most points.
 OverlapResult icp_overlap(const PointCloud& source, const PointCloud& target, const KdTree3f& tree,
-                                 const Eigen::Isometry3d& T, double beta, IcpNnCache& cache) {
+                                 const Eigen::Isometry3d& T, double beta, IcpNnCache& cache, int threads) {
   OverlapResult out;
   const Eigen::Matrix3f R = T.linear().cast<float>();
   const Eigen::Vector3f t = T.translation().cast<float>();
   const float beta_f = static_cast<float>(beta);
   const float beta_sq = static_cast<float>(beta * beta);
+  // Per point: its squared distance when an inlier, -1 when not finite, +inf otherwise; summed in
+  // point order after the (parallel) queries.
+  std::vector<float> best(source.points.size());
+  parallel_for(threads, source.points.size(), kIcpGrain, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const Vector3f& p = source.points[i];
+      if (!p.allFinite()) {
+        best[i] = -1.0f;
+        continue;
+      }
+      std::uint32_t j = 0;
+      best[i] = cached_nearest(target, tree, R * p + t, beta_f, beta_sq, cache[i], j);
+    }
+  });
   double sum_sq = 0.0;
-  for (std::size_t i = 0; i < source.points.size(); ++i) {
-    const Vector3f& p = source.points[i];
-    if (!p.allFinite()) continue;
+  for (const float b : best) {
+    if (b < 0.0f) continue;
     ++out.num_valid;
-    std::uint32_t j = 0;
-    const float best = cached_nearest(target, tree, R * p + t, beta_f, beta_sq, cache[i], j);
-    if (best <= beta_sq) {
+    if (b <= beta_sq) {
       ++out.num_inliers;
-      sum_sq += best;
+      sum_sq += b;
     }
   }
   if (out.num_valid > 0) out.overlap = static_cast<double>(out.num_inliers) / static_cast<double>(out.num_valid);
@@ -324,7 +343,7 @@ IcpResult align_icp(const PointCloud& source, const PointCloud& target, const Kd
     if (failed) break;
     // Liu et al. 2022, sec. 1.3, ICP step (4): accept when the overlap ratio reaches c, else shrink d
     // and run again.
-    out.overlap = detail::icp_overlap(source, target, target_tree, T, settings.overlap_distance, cache).overlap;
+    out.overlap = detail::icp_overlap(source, target, target_tree, T, settings.overlap_distance, cache, settings.threads).overlap;
     if (out.overlap >= settings.min_overlap) {
       gate_passed = true;
       break;

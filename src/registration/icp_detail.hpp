@@ -23,7 +23,12 @@ struct IcpPair {
   Vector3d n;
   std::size_t i = 0;  ///< source index
   std::size_t j = 0;  ///< target index
+  double r_sq = 0.0;  ///< squared residual of the metric
 };
+
+/// Source points per chunk of the parallel correspondence search (fixed: the result does not depend
+/// on the thread count).
+inline constexpr std::size_t kIcpGrain = 1024;
 
 /// What each source point's last kd-tree query taught: its K nearest target points at the
 /// position x_ref where it was made, and a radius r around x_ref that holds no other target point
@@ -52,14 +57,15 @@ class IcpNnCache {
 };
 
 /// Nearest-neighbour pairs of the source under T within distance d (Liu et al. 2022, sec. 1.3, ICP
-/// steps (1)-(2)), through `cache` (cached_nearest). Returns the mean squared residual of the metric.
+/// steps (1)-(2)), through `cache` (cached_nearest), on s.threads threads. Returns the mean squared
+/// residual of the metric.
 double icp_pairs(const PointCloud& source, const PointCloud& target, const KdTree3f& tree, const Eigen::Isometry3d& T,
                  double d, const IcpSettings& s, std::vector<IcpPair>& pairs, IcpNnCache& cache);
 
 /// overlap_ratio() of the source under T through the ICP's neighbour cache: the same result (see
 /// cached_nearest), without a kd-tree query for most points.
 OverlapResult icp_overlap(const PointCloud& source, const PointCloud& target, const KdTree3f& tree,
-                          const Eigen::Isometry3d& T, double beta, IcpNnCache& cache);
+                          const Eigen::Isometry3d& T, double beta, IcpNnCache& cache, int threads = 1);
 
 /// One update from the current pairs; false when the system cannot be solved.
 bool icp_step(const std::vector<IcpPair>& pairs, const IcpSettings& s, Eigen::Isometry3d& delta);

@@ -25,6 +25,7 @@ void check_localize_settings(const LocalizeSettings& s) {
   PLUMB_CHECK(!std::isnan(s.ambiguity_margin) && std::isfinite(s.ambiguity_distance) && s.ambiguity_distance >= 0.0 &&
                   std::isfinite(s.ambiguity_angle) && s.ambiguity_angle >= 0.0,
               "localize_coarse_to_fine: ambiguity_margin must not be NaN, ambiguity_distance / angle must be >= 0");
+  PLUMB_CHECK(s.threads >= 0, "localize_coarse_to_fine: settings.threads = " << s.threads << " must be >= 0 (0 = every core)");
   PLUMB_CHECK(s.normal_neighbors >= 3,
               "localize_coarse_to_fine: settings.normal_neighbors = " << s.normal_neighbors << " must be >= 3");
   for (double f : {s.normal_radius_factor, s.fpfh_radius_factor, s.huber_factor, s.correspondence_factor})
@@ -80,6 +81,7 @@ void localize_normals(PointCloud& c, const LocalizeSettings& s, double leaf, boo
   ns.k = s.normal_neighbors;
   ns.radius = static_cast<float>(s.normal_radius_factor * std::max(leaf, s.voxel_size * 0.25));
   ns.viewpoint = viewpoint;
+  ns.threads = s.threads;
   compute_normals(c, ns);
 }
 
@@ -105,9 +107,11 @@ PointCloud localize_fine_source(const PointCloud& source, const PointCloud& targ
 /// The gated ICP from T_init, then (settings.polish) one round at the smallest distance.
 IcpResult localize_fine_stage(const PointCloud& fine, const LocalizeTarget& target,
                               const Eigen::Isometry3d& T_init, const LocalizeSettings& settings) {
-  IcpResult r = align_icp(fine, target.fine, *target.fine_tree, T_init, settings.icp);
+  IcpSettings icp = settings.icp;
+  icp.threads = settings.threads;
+  IcpResult r = align_icp(fine, target.fine, *target.fine_tree, T_init, icp);
   if (settings.polish && r.status != Status::kInsufficientData) {
-    IcpSettings ps = settings.icp;
+    IcpSettings ps = icp;
     ps.max_correspondence_distance = ps.min_correspondence_distance;
     ps.max_rounds = 1;
     ps.min_overlap = 0.0;

@@ -379,6 +379,16 @@ TEST(LoamOdometryTest, ScanToMapRecoversThePoseInTheMap) {
   EXPECT_GT(r.num_plane, 100u);
   EXPECT_LT(translation_error(r.T_prev_cur, T_w_c), 0.02);
   EXPECT_LT(rotation_error_deg(r.T_prev_cur, T_w_c), 0.2);
+  // The association on several threads: the same correspondences, so the same result bit for bit.
+  for (const int threads : {2, 3, 0}) {
+    LoamSettings s;
+    s.threads = threads;
+    const LoamResult t = loam_scan_to_map(map, features_at(T_w_c), pose(0.35, 0.4, 0.0, 10.0, 0.0, 0.0), s);
+    EXPECT_EQ(t.T_prev_cur.matrix(), r.T_prev_cur.matrix()) << threads;
+    EXPECT_EQ(t.iterations, r.iterations) << threads;
+    EXPECT_EQ(t.num_plane, r.num_plane) << threads;
+    EXPECT_EQ(t.num_edge, r.num_edge) << threads;
+  }
 }
 
 TEST(LoamOdometryTest, PointToPointIcpRecoversAnExactlyTransformedCloud) {

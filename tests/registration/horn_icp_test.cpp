@@ -393,6 +393,43 @@ TEST(IcpTest, Deterministic) {
   EXPECT_EQ(a.rmse, b.rmse);
 }
 
+// The correspondence search split over threads changes nothing: the same pose, iterations,
+// inliers, RMSE, overlap and normal matrix bit for bit as on one thread, for both metrics and a
+// robust kernel, on clouds of many chunks.
+TEST(IcpTest, ThreadCountDoesNotChangeTheResult) {
+  const PointCloud target = room_cloud(0.08, 1);
+  Rng rng(9);
+  const PointCloud source = transformed(room_cloud(0.1, 2), random_pose(rng, 0.2, 0.1));
+  ASSERT_GT(source.size(), 5 * detail::kIcpGrain);
+  for (const IcpMethod method : {IcpMethod::kPointToPoint, IcpMethod::kPointToPlane}) {
+    IcpSettings s;
+    s.method = method;
+    s.kernel = RobustKernel::kHuber;
+    s.keep_correspondences = true;
+    const IcpResult one = align_icp(source, target, Eigen::Isometry3d::Identity(), s);
+    ASSERT_GT(one.iterations, 2);
+    for (const int threads : {2, 3, 8, 0}) {
+      s.threads = threads;
+      const IcpResult r = align_icp(source, target, Eigen::Isometry3d::Identity(), s);
+      EXPECT_EQ(r.T_target_source.matrix(), one.T_target_source.matrix()) << threads;
+      EXPECT_EQ(r.iterations, one.iterations) << threads;
+      EXPECT_EQ(r.rounds, one.rounds) << threads;
+      EXPECT_EQ(r.num_inliers, one.num_inliers) << threads;
+      EXPECT_EQ(r.rmse, one.rmse) << threads;
+      EXPECT_EQ(r.overlap, one.overlap) << threads;
+      EXPECT_EQ(r.normal_matrix, one.normal_matrix) << threads;
+      ASSERT_EQ(r.correspondences.size(), one.correspondences.size()) << threads;
+      for (std::size_t k = 0; k < r.correspondences.size(); ++k) {
+        EXPECT_EQ(r.correspondences[k].source_index, one.correspondences[k].source_index) << k;
+        EXPECT_EQ(r.correspondences[k].target_index, one.correspondences[k].target_index) << k;
+      }
+    }
+  }
+  IcpSettings bad;
+  bad.threads = -1;
+  EXPECT_THROW(align_icp(source, target, Eigen::Isometry3d::Identity(), bad), Error);
+}
+
 // The per-point query cache of align_icp (bounded searches, skipped far points) only prunes: the
 // iterates must equal a plain ICP written here with brute-force nearest neighbours, also when
 // most of the source lies outside the correspondence distance (clutter beyond the room).

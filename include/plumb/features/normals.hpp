@@ -25,6 +25,9 @@ struct NormalSettings {
   Vector3f viewpoint = Vector3f::Zero();
   /// Flip toward `viewpoint`; false leaves the sign of the smallest eigenvector as computed.
   bool orient_to_viewpoint = true;
+  /// Threads (0 = every core). Points are split into fixed chunks, so the normals are identical
+  /// for any count (core/parallel.hpp).
+  int threads = 1;
 };
 
 /// @brief Per-point normals and surface variation.
@@ -45,7 +48,7 @@ struct NormalResult {
 ///       of < 3 points, or of coincident or collinear points, has no unique normal: NaN. The
 ///       hybrid search returns the k nearest points within `radius` (ties broken arbitrarily),
 ///       by a radius search while balls are small and by a k-nearest search where they are dense.
-///       Deterministic; single thread; O(n (k + log n)).
+///       Deterministic for any settings.threads; O(n (k + log n)).
 NormalResult estimate_normals(const std::vector<Vector3f>& cloud, const KdTree<3>& tree,
                               const std::vector<Vector3f>& tree_points,
                               const NormalSettings& settings = {});

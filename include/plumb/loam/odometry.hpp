@@ -46,6 +46,9 @@ struct LoamSettings {
   /// A plane needs second / smallest eigenvalue >= this: neighbours along one scan line (nearly
   /// collinear, e.g. a ring of ground returns seen from a standing sensor) fix no normal.
   double map_plane_ratio = 10.0;
+  /// Threads of the scan-to-map association (0 = every core); its correspondences, and so every
+  /// result, are bit-identical for any count (core/parallel.hpp).
+  int threads = 1;
 };
 
 /// @brief Result of the LOAM scan matchers.
@@ -128,7 +131,7 @@ class LoamMap {
 /// @param T_prev_cur_guess initial estimate (e.g. from the IMU or constant velocity)
 /// @return the estimate; too few features or correspondences → Status::kInsufficientData
 /// @throws plumb::Error on misuse: non-finite guess, bad settings, non-empty feature clouds without rings
-/// @note Deterministic; single-threaded; O(iterations * n log m).
+/// @note Deterministic; single-threaded (settings.threads is used by the scan-to-map association only); O(iterations * n log m).
 LoamResult loam_scan_to_scan(const LoamFeatures& prev, const LoamFeatures& cur,
                              const Eigen::Isometry3d& T_prev_cur_guess,
                              const LoamSettings& settings = {});

@@ -100,6 +100,9 @@ struct BimOdometrySettings {
   bool estimate_as_built = false;
   AsBuiltSettings as_built;               ///< the estimator's settings (construction tolerance, ...)
   std::size_t as_built_refresh_every = 10;  ///< accepted anchors between updates of the registration target
+  /// Threads of the BIM registration's correspondence search (0 = every core; replaces
+  /// `icp.threads`). Results are bit-identical for any count (core/parallel.hpp).
+  int threads = 1;
 };
 
 /// @brief Covariance (x, y, θ; frame of the previous base pose) BimOdometry gives one front-end step.

@@ -225,6 +225,9 @@ struct HybridLioSettings {
   LioMapSettings map;           ///< local maps
   LioImuSettings imu;           ///< IMU factor and initial prior
   LioMotionSettings motion;     ///< constant-velocity model and deskew
+  /// Threads of the correspondence search against the maps (0 = every core); results are
+  /// bit-identical for any count (core/parallel.hpp).
+  int threads = 1;
 };
 
 /// @brief What HybridLio::process() did with one frame.

@@ -51,6 +51,9 @@ struct IcpSettings {
   /// Return the final correspondences in IcpResult::correspondences (for a caller that needs
   /// them, e.g. to build an information matrix, without searching the target again).
   bool keep_correspondences = false;
+  /// Threads of the correspondence search (0 = every core). The result is bit-identical for any
+  /// count (core/parallel.hpp): points are split into fixed chunks and summed in point order.
+  int threads = 1;
 };
 
 /// @brief One final source-target pair of align_icp().
