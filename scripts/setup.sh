@@ -11,7 +11,7 @@ set -euo pipefail
 packages=(cmake g++ make libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev liblzf-dev zlib1g-dev
           libcli11-dev nlohmann-json3-dev ccache python3
           python3-dev pybind11-dev python3-numpy python3-pytest python3-matplotlib libxml2-utils
-          libbz2-dev liblz4-dev
+          libbz2-dev liblz4-dev libzstd-dev
           python3-rosbag python3-sensor-msgs python3-nav-msgs python3-tf2-msgs python3-geometry-msgs)
 for arg in "$@"; do
   case "$arg" in
