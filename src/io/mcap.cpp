@@ -202,6 +202,8 @@ void McapReader::open() {
   char magic[kMcapMagicSize] = {};
   in.seekg(0);
   in.read(magic, kMcapMagicSize);
+  PLUMB_CHECK(file_size_ >= kMcapMagicSize, path_ << ": offset 0: file of " << file_size_
+                                                  << " bytes: truncated, or not an MCAP file");
   PLUMB_CHECK(in.good() && std::memcmp(magic, kMcapMagic, kMcapMagicSize) == 0,
               path_ << ": offset 0: not an MCAP file (no MCAP magic)");
   Place at{&path_, kMcapMagicSize};

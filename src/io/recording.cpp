@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "plumb/io/recording.hpp"
 
+#include <algorithm>
 #include <cstring>
 #include <fstream>
 
@@ -21,11 +22,14 @@ std::string ros1_type_name(const std::string& type) {
 
 std::unique_ptr<Recording> open_recording(const std::string& path) {
   char head[16] = {};
+  std::size_t n = 0;
   {
     std::ifstream in = open_input_file(path);
     in.read(head, sizeof(head));
+    n = static_cast<std::size_t>(in.gcount());
   }
-  if (std::memcmp(head, kMcapMagic, kMcapMagicSize) == 0) return std::make_unique<McapReader>(path);
+  // The MCAP magic, or as much of it as a truncated file holds.
+  if (n > 0 && std::memcmp(head, kMcapMagic, std::min(n, kMcapMagicSize)) == 0) return std::make_unique<McapReader>(path);
   PLUMB_CHECK(std::memcmp(head, "SQLite format 3", 16) != 0,
               path << ": offset 0: a ROS 2 bag in sqlite3 (.db3), which plumb does not read; convert it to MCAP "
                       "with `ros2 bag convert` (storage_id: mcap) and import the .mcap file");
