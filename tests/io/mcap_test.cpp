@@ -14,44 +14,17 @@
 #include "plumb/core/error.hpp"
 #include "plumb/io/mcap.hpp"
 #include "plumb/io/ros_messages.hpp"
+#include "mcap_builder.hpp"
 
 namespace plumb {
 namespace {
 
-// Little-endian bytes.
-struct Le {
-  std::string s;
-  template <class T>
-  Le& num(T v) {
-    char b[sizeof(T)];
-    std::memcpy(b, &v, sizeof(T));
-    s.append(b, sizeof(T));
-    return *this;
-  }
-  Le& str(const std::string& v) {
-    num<std::uint32_t>(static_cast<std::uint32_t>(v.size()));
-    s += v;
-    return *this;
-  }
-};
+using Le = test::McapFields;
+using test::crc32_of;
+using test::mcap_record;
+const auto& record = mcap_record;
 
-std::string record(std::uint8_t op, const std::string& content) {
-  Le r;
-  r.num(op).num<std::uint64_t>(content.size());
-  return r.s + content;
-}
-
-// CRC-32 (ISO-HDLC, as zlib), bit by bit.
-std::uint32_t crc32_of(const std::string& s) {
-  std::uint32_t c = 0xffffffffu;
-  for (unsigned char b : s) {
-    c ^= b;
-    for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xedb88320u & (0u - (c & 1u)));
-  }
-  return ~c;
-}
-
-const std::string kMagic("\x89MCAP0\r\n", 8);
+const std::string& kMagic = test::kMcapMagicBytes;
 
 std::string header() { return record(0x01, Le().str("ros2").str("plumb test").s); }
 std::string schema() {
@@ -215,29 +188,7 @@ TEST(McapReaderTest, NotMcapIsRefused) {
   EXPECT_THROW(reader(kMagic + header() + data_end() + footer(1u << 30) + kMagic), Error);
 }
 
-// CDR: a builder aligning each primitive to its size, counted from the end of the 4-byte header.
-struct Cdr {
-  bool big;
-  std::string s;
-  explicit Cdr(bool big_endian) : big(big_endian) { s = std::string("\0", 1) + (big ? '\0' : '\1') + std::string(2, '\0'); }
-  template <class T>
-  Cdr& num(T v) {
-    while ((s.size() - 4) % sizeof(T) != 0) s += '\x77';  // padding, any value
-    char b[sizeof(T)];
-    std::memcpy(b, &v, sizeof(T));
-    if (big) std::reverse(b, b + sizeof(T));
-    s.append(b, sizeof(T));
-    return *this;
-  }
-  Cdr& str(const std::string& v) {
-    num<std::uint32_t>(static_cast<std::uint32_t>(v.size() + 1));
-    s += v;
-    s += '\0';
-    return *this;
-  }
-  Cdr& header(std::int32_t sec, std::uint32_t nsec, const std::string& frame) { return num(sec).num(nsec).str(frame); }
-  const std::uint8_t* data() const { return reinterpret_cast<const std::uint8_t*>(s.data()); }
-};
+using Cdr = test::CdrFields;
 
 TEST(CdrDecodeTest, ImuInEitherByteOrder) {
   for (const bool big : {false, true}) {
