@@ -35,7 +35,8 @@ namespace plumb::cli {
 namespace {
 
 struct ImportOptions {
-  std::string bag, output, lidar, imu, odom, base_frame = "base_link";
+  std::string bag, output, lidar, imu, odom, wheels, base_frame = "base_link";
+  std::vector<std::string> wheel_joints;  // left, right (with --wheels)
   std::vector<double> T_base_lidar, T_base_imu;  // x y z roll pitch yaw, empty = from /tf_static
   double start = 0.0;
   double duration = std::numeric_limits<double>::infinity();
@@ -114,8 +115,9 @@ void print_list(const io::Recording& bag, bool json) {
 
 // What import() found and wrote.
 struct ImportSummary {
-  std::string lidar, imu, odom;
-  std::size_t frames = 0, points = 0, nonfinite = 0, skipped_frames = 0, imu_samples = 0, odometry = 0;
+  std::string lidar, imu, odom, wheels;
+  std::size_t frames = 0, points = 0, nonfinite = 0, skipped_frames = 0, imu_samples = 0, odometry = 0,
+              wheel_readings = 0;
   std::string T_base_lidar_from, T_base_imu_from;
   bool times = true;
 };
@@ -196,6 +198,22 @@ io::FrameDumpMeta dump_meta(const ImportOptions& o, const io::Recording& bag, co
   return meta;
 }
 
+// The wheel angles of a sensor_msgs/JointState: the positions of the joints `joints` (left, right).
+WheelEncoderReading wheel_reading(const io::RecordedMessage& m, std::size_t index, const std::vector<std::string>& joints) {
+  return decoding(m, index, [&] {
+    const io::RosJointState js = io::decode_joint_state(m.data, m.size, m.serialization);
+    WheelEncoderReading r;
+    r.stamp = js.header.stamp.seconds();
+    for (int side = 0; side < 2; ++side) {
+      const auto at = std::find(js.name.begin(), js.name.end(), joints[side]);
+      PLUMB_CHECK(at != js.name.end(), "no joint '" << joints[side] << "' (--wheel-joints)");
+      PLUMB_CHECK(!js.position.empty(), "no positions");
+      (side == 0 ? r.left : r.right) = js.position[static_cast<std::size_t>(at - js.name.begin())];
+    }
+    return r;
+  });
+}
+
 ImportSummary import_bag(const ImportOptions& o, const io::Recording& bag) {
   ImportSummary s;
   const std::vector<io::BagTopic> topics = bag.topics();
@@ -205,6 +223,11 @@ ImportSummary import_bag(const ImportOptions& o, const io::Recording& bag) {
   std::vector<std::string> ids = checked_topic(bag, s.lidar, "sensor_msgs/PointCloud2");
   for (const std::string& t : checked_topic(bag, s.imu, "sensor_msgs/Imu")) ids.push_back(t);
   for (const std::string& t : checked_topic(bag, s.odom, "nav_msgs/Odometry")) ids.push_back(t);
+  if (!o.wheels.empty()) {
+    PLUMB_CHECK(o.wheel_joints.size() == 2, "import: --wheels needs --wheel-joints LEFT RIGHT (the joint names)");
+    s.wheels = choose_topic(topics, o.wheels, "sensor_msgs/JointState", "--wheels", true, o.bag);
+    for (const std::string& t : checked_topic(bag, s.wheels, "sensor_msgs/JointState")) ids.push_back(t);
+  }
   io::FrameDumpMeta meta = dump_meta(o, bag, topics, s);
   meta.source = "plumb import " + o.bag.substr(o.bag.find_last_of('/') + 1) + " (" + s.lidar + ")";
 
@@ -214,7 +237,8 @@ ImportSummary import_bag(const ImportOptions& o, const io::Recording& bag) {
   const double end_s = static_cast<double>(begin_ns) * 1e-9 + o.duration;
   std::vector<io::ImuSample> imu;
   std::vector<io::OdomSample> odom;
-  std::size_t lidar_index = 0, imu_index = 0, odom_index = 0;
+  std::vector<WheelEncoderReading> wheels;
+  std::size_t lidar_index = 0, imu_index = 0, odom_index = 0, wheel_index = 0;
   double last_stamp = -std::numeric_limits<double>::infinity();
   const bool tty = isatty(fileno(stderr)) != 0;
   bag.read_topics(
@@ -243,6 +267,8 @@ ImportSummary import_bag(const ImportOptions& o, const io::Recording& bag) {
           s.points += pc.cloud.size();
         } else if (topic == s.imu) {
           imu.push_back(decoding(m, imu_index++, [&] { return io::decode_imu(m.data, m.size, m.serialization); }).sample);
+        } else if (topic == s.wheels) {
+          wheels.push_back(wheel_reading(m, wheel_index++, o.wheel_joints));
         } else {
           const io::RosOdometry od = decoding(m, odom_index++, [&] { return io::decode_odometry(m.data, m.size, m.serialization); });
           const Eigen::Matrix3d R = od.pose.linear();
@@ -263,17 +289,21 @@ ImportSummary import_bag(const ImportOptions& o, const io::Recording& bag) {
               << " has no per-point time field (time, t or timestamp): times synthesised from the azimuth, one turn in "
               << 1.0 / (meta.lidar.rate_hz > 0 ? meta.lidar.rate_hz : 10.0) << " s\n";
   }
-  const std::size_t dropped = sort_unique(imu) + sort_unique(odom);
-  if (dropped > 0) std::cerr << "plumb: warning: " << dropped << " IMU / odometry messages with a repeated stamp dropped\n";
+  const std::size_t dropped = sort_unique(imu) + sort_unique(odom) + sort_unique(wheels);
+  if (dropped > 0) {
+    std::cerr << "plumb: warning: " << dropped << " IMU / odometry / wheel messages with a repeated stamp dropped\n";
+  }
   if (s.skipped_frames > 0) {
     std::cerr << "plumb: warning: " << s.skipped_frames << " frames whose stamp does not increase were skipped\n";
   }
   if (!s.imu.empty()) writer.write_imu(imu);
   if (!s.odom.empty()) writer.write_odometry(odom);
+  if (!s.wheels.empty()) writer.write_wheels(wheels);
   writer.close();
   out.commit();
   s.imu_samples = imu.size();
   s.odometry = odom.size();
+  s.wheel_readings = wheels.size();
   return s;
 }
 
@@ -295,6 +325,8 @@ void run_import(const ImportOptions& o) {
                         {"skipped_frames", s.skipped_frames},
                         {"imu_samples", s.imu_samples},
                         {"odometry", s.odometry},
+                        {"wheels", s.wheels},
+                        {"wheel_readings", s.wheel_readings},
                         {"point_times", s.times},
                         {"T_base_lidar_from", s.T_base_lidar_from},
                         {"T_base_imu_from", s.T_base_imu_from},
@@ -318,6 +350,10 @@ void register_import_command(CLI::App& app) {
   cmd->add_option("--lidar", opts->lidar, "sensor_msgs/PointCloud2 topic (default: the only one)");
   cmd->add_option("--imu", opts->imu, "sensor_msgs/Imu topic (default: the only one, if any)");
   cmd->add_option("--odom", opts->odom, "nav_msgs/Odometry topic for odom.csv (default: the only one, if any)");
+  cmd->add_option("--wheels", opts->wheels,
+                  "sensor_msgs/JointState topic of the wheel angles for wheels.csv (needs --wheel-joints)");
+  cmd->add_option("--wheel-joints", opts->wheel_joints, "The left and right wheel joints' names in --wheels")
+      ->expected(2);
   cmd->add_option("--base-frame", opts->base_frame, "The robot's base frame in /tf_static (default base_link)");
   cmd->add_option("--T-base-lidar", opts->T_base_lidar,
                   "LiDAR mounting: x y z [m] roll pitch yaw [rad] (default: from /tf_static)")

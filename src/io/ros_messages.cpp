@@ -10,6 +10,8 @@
 //                              float64[9]
 //   nav_msgs/Odometry          Header, string child_frame_id, Pose (Point, Quaternion x y z w),
 //                              float64[36], Twist (Vector3 linear, Vector3 angular), float64[36]
+//   sensor_msgs/JointState     Header, string[] name, float64[] position, float64[] velocity,
+//                              float64[] effort
 //   tf2_msgs/TFMessage         TransformStamped[]: Header, string child_frame_id,
 //                              Transform (Vector3 translation, Quaternion rotation)
 #include "plumb/io/ros_messages.hpp"
@@ -152,6 +154,7 @@ const char* ros_known_md5sum(const std::string& type) {
   if (type == "sensor_msgs/Imu") return kRosImuMd5;
   if (type == "nav_msgs/Odometry") return kRosOdometryMd5;
   if (type == "tf2_msgs/TFMessage") return kRosTfMessageMd5;
+  if (type == "sensor_msgs/JointState") return kRosJointStateMd5;
   return nullptr;
 }
 
@@ -293,6 +296,19 @@ RosOdometry decode_odometry(const std::uint8_t* data, std::size_t size, RosSeria
   out.pose.translation() = t;
   c.skip_f64(36 + 6 + 36, "pose.covariance and twist");
   return out;
+}
+
+RosJointState decode_joint_state(const std::uint8_t* data, std::size_t size, RosSerialization serialization) {
+  Cursor c(data, size, "JointState", serialization);
+  RosJointState out;
+  out.header = c.header();
+  const std::uint32_t names = c.u32("name");
+  for (std::uint32_t i = 0; i < names; ++i) out.name.push_back(c.str("name"));
+  const std::uint32_t positions = c.u32("position");
+  PLUMB_CHECK(positions == 0 || positions == names,
+              "JointState: " << positions << " positions for " << names << " joint names");
+  for (std::uint32_t i = 0; i < positions; ++i) out.position.push_back(c.f64("position"));
+  return out;  // velocity and effort are not used
 }
 
 std::vector<RosTransform> decode_tf_message(const std::uint8_t* data, std::size_t size, RosSerialization serialization) {

@@ -260,6 +260,22 @@ TEST_F(ImportMcapCliTest, AnotherTypeOrEncodingIsRefusedNamingTheTopic) {
   EXPECT_NE(r.err.find("ros2 bag convert"), std::string::npos) << r.err;
 }
 
+TEST_F(ImportMcapCliTest, WheelAnglesFromJointState) {
+  const io::FrameDumpReader want(dump());
+  const std::string out = dir_ + "/imported_wheels";
+  const test::RunResult r =
+      import(mcap("zstd", "pcd", 3, "--wheels"), out, "--wheels /joint_states --wheel-joints wheel_left wheel_right --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto got = io::FrameDumpReader(out).wheels(), expected = want.wheels();
+  EXPECT_EQ(Json::parse(r.out)["wheel_readings"], expected.size());
+  ASSERT_EQ(got.size(), expected.size());
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    EXPECT_NEAR(got[i].stamp, expected[i].stamp, 1e-9) << i;
+    EXPECT_EQ(got[i].left, expected[i].left) << i;
+    EXPECT_EQ(got[i].right, expected[i].right) << i;
+  }
+}
+
 // Two LIO runs.
 TEST_F(ImportMcapCliTest, HybridLioOnTheImportedDumpFollowsTheOriginal) {
   constexpr int kFrames = 20;

@@ -258,6 +258,21 @@ TEST(CdrDecodeTest, TransformsAndOdometry) {
   EXPECT_EQ(o.pose.translation(), Eigen::Vector3d(1, 2, 0));
 }
 
+TEST(CdrDecodeTest, JointStateInEitherByteOrder) {
+  for (const bool big : {false, true}) {
+    Cdr c(big);
+    c.header(7, 8, "").num<std::uint32_t>(2).str("wheel_left").str("wheel_right");
+    c.num<std::uint32_t>(2).num(1.25).num(-2.5);                // position, aligned to 8 after the count
+    c.num<std::uint32_t>(0).num<std::uint32_t>(0);              // velocity, effort
+    const io::RosJointState js = io::decode_joint_state(c.data(), c.s.size(), io::RosSerialization::kCdr);
+    EXPECT_EQ(js.name, (std::vector<std::string>{"wheel_left", "wheel_right"}));
+    EXPECT_EQ(js.position, (std::vector<double>{1.25, -2.5}));
+  }
+  Cdr bad(false);
+  bad.header(7, 8, "").num<std::uint32_t>(2).str("a").str("b").num<std::uint32_t>(1).num(1.0);
+  EXPECT_THROW(io::decode_joint_state(bad.data(), bad.s.size(), io::RosSerialization::kCdr), Error);
+}
+
 TEST(CdrDecodeTest, BadEncapsulationOrStampIsRefused) {
   Cdr pl(false);
   pl.s[1] = '\3';  // PL_CDR_LE

@@ -34,6 +34,7 @@ inline constexpr const char* kRosPointCloud2Md5 = "1158d486dd51d683ce2f1be655c3c
 inline constexpr const char* kRosImuMd5 = "6a62c6daae103f4ff57a132d6f95cec2";
 inline constexpr const char* kRosOdometryMd5 = "cd5e73d190d741a2f92e81eda573aca7";
 inline constexpr const char* kRosTfMessageMd5 = "94810edda583a504dfda3829e70d7eec";
+inline constexpr const char* kRosJointStateMd5 = "3066dcd76a6cfaef579bd0f34173e9fd";
 /// @}
 
 /// @brief The md5sum of a decoded type ("sensor_msgs/PointCloud2", ...), nullptr for another type.
@@ -97,6 +98,16 @@ struct RosOdometry {
 /// @throws plumb::Error when the message is cut short or the quaternion is zero.
 RosOdometry decode_odometry(const std::uint8_t* data, std::size_t size,
                             RosSerialization serialization = RosSerialization::kRos1);
+
+/// @brief A decoded sensor_msgs/JointState: per joint its name and (when sent) position [rad or m].
+struct RosJointState {
+  RosHeader header;
+  std::vector<std::string> name;
+  std::vector<double> position;  ///< empty, or one per name
+};
+/// @throws plumb::Error when cut short or `position` is neither empty nor as long as `name`.
+RosJointState decode_joint_state(const std::uint8_t* data, std::size_t size,
+                                 RosSerialization serialization = RosSerialization::kRos1);
 
 /// @brief One geometry_msgs/TransformStamped: T_parent_child, parent = `header.frame_id`.
 struct RosTransform {

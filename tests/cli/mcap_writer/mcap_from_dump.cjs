@@ -5,7 +5,9 @@
 // of `plumb import`: the ROS 2 counterpart of tests/cli/bag_from_dump.py, with the same topics,
 // frames and layouts: the first FRAMES LiDAR frames as sensor_msgs/msg/PointCloud2 on /points
 // (frame "lidar"), imu.csv as sensor_msgs/msg/Imu on /imu (frame "imu"), odom.csv as
-// nav_msgs/msg/Odometry on /odom and the extrinsics as tf2_msgs/msg/TFMessage on /tf_static.
+// nav_msgs/msg/Odometry on /odom and the extrinsics as tf2_msgs/msg/TFMessage on /tf_static; with
+// --wheels also wheels.csv as sensor_msgs/msg/JointState on /joint_states (joints "caster",
+// "wheel_left", "wheel_right": the wheel angles [rad], the caster at 0).
 //
 // Layouts of the clouds: "pcd" sends the PCD records as they are; "unusual" reorders the fields,
 // pads point_step, stores x y z as float64 and splits the points in two rows with padding at each
@@ -13,7 +15,7 @@
 //
 // usage: node mcap_from_dump.cjs DUMP OUT.mcap [--compression none|lz4|zstd] [--layout L]
 //                               [--frames N] [--no-tf-static] [--unchunked] [--no-summary]
-//                               [--cdr-be]
+//                               [--cdr-be] [--wheels]
 // --cdr-be writes the clouds in big-endian CDR (the rest stays little-endian, as ROS 2 writes).
 // The node_modules come from NODE_PATH (scripts/setup.sh installs them in ~/.cache/plumb/mcap-writer).
 'use strict';
@@ -47,6 +49,8 @@ const DEFINITIONS = {
     'MSG: geometry_msgs/Pose\ngeometry_msgs/Point position\ngeometry_msgs/Quaternion orientation\n', POINT,
     QUATERNION, 'MSG: geometry_msgs/TwistWithCovariance\ngeometry_msgs/Twist twist\nfloat64[36] covariance\n',
     'MSG: geometry_msgs/Twist\ngeometry_msgs/Vector3 linear\ngeometry_msgs/Vector3 angular\n', VECTOR3],
+  'sensor_msgs/msg/JointState': ['std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\n' +
+    'float64[] effort\n', HEADER],
   'tf2_msgs/msg/TFMessage': ['geometry_msgs/TransformStamped[] transforms\n',
     'MSG: geometry_msgs/TransformStamped\nstd_msgs/Header header\nstring child_frame_id\n' +
     'geometry_msgs/Transform transform\n', HEADER,
@@ -56,7 +60,7 @@ const DEFINITIONS = {
 const PCD_TO_ROS = { I1: 1, U1: 2, I2: 3, U2: 4, I4: 5, U4: 6, F4: 7, F8: 8 };
 
 function args() {
-  const a = { compression: 'none', layout: 'pcd', frames: 1e9, tf: true, chunked: true, summary: true, cdrBe: false };
+  const a = { compression: 'none', layout: 'pcd', frames: 1e9, tf: true, chunked: true, summary: true, cdrBe: false, wheels: false };
   const rest = process.argv.slice(2);
   const positional = [];
   for (let i = 0; i < rest.length; ++i) {
@@ -68,6 +72,7 @@ function args() {
     else if (o === '--unchunked') a.chunked = false;
     else if (o === '--no-summary') a.summary = false;
     else if (o === '--cdr-be') a.cdrBe = true;
+    else if (o === '--wheels') a.wheels = true;
     else if (o.startsWith('--')) throw new Error('unknown option ' + o);
     else positional.push(o);
   }
@@ -224,6 +229,13 @@ async function main() {
         covariance: zero36 },
       twist: { twist: { linear: { x: 0, y: 0, z: 0 }, angular: { x: 0, y: 0, z: 0 } }, covariance: zero36 } }]);
   }
+  if (a.wheels) {
+    for (const [stamp, left, right] of rows(path.join(a.dump, 'wheels.csv'))) {
+      const t = rosTime(stamp);
+      messages.push([stamp, 4, '/joint_states', { header: { stamp: { sec: t.sec, nanosec: t.nanosec }, frame_id: '' },
+        name: ['caster', 'wheel_left', 'wheel_right'], position: [0, left, right], velocity: [], effort: [] }]);
+    }
+  }
   const frames = csvRows(path.join(a.dump, 'frames.csv')).slice(0, a.frames);
   const first = Number(frames[0][1]);
   if (a.tf) {
@@ -249,6 +261,7 @@ async function main() {
   const channels = {}, serializers = {};
   const types = { '/imu': 'sensor_msgs/msg/Imu', '/odom': 'nav_msgs/msg/Odometry', '/tf_static': 'tf2_msgs/msg/TFMessage',
     '/points': 'sensor_msgs/msg/PointCloud2' };
+  if (a.wheels) types['/joint_states'] = 'sensor_msgs/msg/JointState';
   for (const [topic, type] of Object.entries(types)) {
     const text = DEFINITIONS[type].join(SEP);
     serializers[topic] = new MessageWriter(parse(text, { ros2: true }));
