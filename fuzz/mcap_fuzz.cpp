@@ -4,7 +4,8 @@
 // its type's CDR decoder when it has one) or throw plumb::Error, never crash or hang (ASan checks
 // that every message handed out lies inside its chunk or record).
 // Seeds: fuzz/seeds/mcap/*.mcap (tiny hand-made files: a chunk of each compression with a summary
-// and message indexes, one without a summary, one without chunks; CDR Imu and PointCloud2).
+// and message indexes, one without a summary, one without chunks; CDR Imu and PointCloud2; one
+// JointState).
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -35,6 +36,8 @@ void decode(const std::string& type, const plumb::io::McapMessage& m) {
       plumb::io::decode_odometry(m.data, m.size, kCdr);
     } else if (type == "tf2_msgs/msg/TFMessage") {
       plumb::io::decode_tf_message(m.data, m.size, kCdr);
+    } else if (type == "sensor_msgs/msg/JointState") {
+      plumb::io::decode_joint_state(m.data, m.size, kCdr);
     }
   } catch (const plumb::Error&) {
   }

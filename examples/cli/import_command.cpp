@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// `plumb import BAG -o DUMP [--lidar TOPIC] [--imu TOPIC] [--odom TOPIC] [--base-frame NAME]
-// [--T-base-lidar x y z roll pitch yaw] [--T-base-imu ...] [--start S] [--duration S] [--json]`:
+// `plumb import BAG -o DUMP [--lidar TOPIC] [--imu TOPIC] [--odom TOPIC] [--wheels TOPIC --wheel-joints L R]
+// [--base-frame NAME] [--T-base-lidar x y z roll pitch yaw] [--T-base-imu ...] [--start S] [--duration S] [--json]`:
 // a ROS 1 bag or a ROS 2 bag in MCAP (sensor_msgs/PointCloud2, sensor_msgs/Imu, nav_msgs/Odometry,
 // /tf_static; in ROS 2 sensor_msgs/msg/PointCloud2, ...) becomes a frame dump. `plumb import BAG
 // --list` prints the bag's topics as `rosbag info` does. The bag is read chunk by chunk: /tf_static
