@@ -133,6 +133,19 @@ RecordHead record_head(std::istream& in, std::uint64_t pos, std::uint64_t end, c
   return r;
 }
 
+// The CRC32 of the file's bytes begin..end, read a MiB at a time.
+std::uint32_t file_crc32(std::istream& in, std::uint64_t begin, std::uint64_t end, const Place& at) {
+  std::vector<std::uint8_t> buf(std::min<std::uint64_t>(end - begin, 1 << 20));
+  uLong crc = crc32_z(0L, Z_NULL, 0);
+  for (std::uint64_t pos = begin; pos < end;) {
+    const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(end - pos, buf.size()));
+    read_at(in, pos, buf.data(), n, at);
+    crc = crc32_z(crc, buf.data(), n);
+    pos += n;
+  }
+  return static_cast<std::uint32_t>(crc);
+}
+
 std::vector<std::uint8_t> content(std::istream& in, const RecordHead& r, const Place& at) {
   std::vector<std::uint8_t> data(static_cast<std::size_t>(r.length));
   if (!data.empty()) read_at(in, r.content, data.data(), data.size(), at);
@@ -232,12 +245,18 @@ void McapReader::open() {
   Fields ff(fc.data(), fc.size(), "footer", at);
   const auto summary_start = ff.num<std::uint64_t>("summary_start");
   const auto summary_offset_start = ff.num<std::uint64_t>("summary_offset_start");
+  const auto summary_crc = ff.num<std::uint32_t>("summary_crc");
   data_end_ = footer;
   if (summary_start != 0) {
     const std::uint64_t summary_end = summary_offset_start != 0 ? summary_offset_start : footer;
     PLUMB_CHECK(summary_start >= data_begin_ && summary_start <= summary_end && summary_end <= footer,
                 at << ": summary section " << summary_start << ".." << summary_end << " outside the file's records ("
                    << data_begin_ << ".." << footer << ')');
+    if (summary_crc != 0) {  // over the summary up to the footer's summary_offset_start
+      const std::uint32_t got = file_crc32(in, summary_start, footer + kRecordHead + 16, at);
+      PLUMB_CHECK(got == summary_crc, at << ": summary CRC32 " << got << " differs from the footer's " << summary_crc
+                                         << ": the summary section is corrupt");
+    }
     data_end_ = summary_start;
     summary_ = true;
     read_summary(summary_start, summary_end);

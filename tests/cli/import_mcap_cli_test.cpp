@@ -241,16 +241,28 @@ TEST_F(ImportMcapCliTest, ACorruptChunkFailsNamingItsOffset) {
 }
 
 TEST_F(ImportMcapCliTest, AnotherTypeOrEncodingIsRefusedNamingTheTopic) {
-  // Unchunked: the schemas are plain bytes of the file (no chunk CRC over them).
-  std::string bytes = test::read_text(mcap("none", "pcd", 2, "--unchunked"));
+  // Unchunked and without a summary: the schemas are plain bytes of the file, under no CRC.
   const std::string from = "sensor_msgs/msg/Imu", to = "sensor_msgs/msg/Imx";
-  for (std::size_t at = bytes.find(from); at != std::string::npos; at = bytes.find(from, at)) bytes.replace(at, from.size(), to);
-  const std::string bad = dir_ + "/other_type.mcap";
-  std::ofstream(bad, std::ios::binary) << bytes;
+  auto retyped = [&](const std::string& options) {
+    std::string bytes = test::read_text(mcap("none", "pcd", 2, options));
+    for (std::size_t at = bytes.find(from); at != std::string::npos; at = bytes.find(from, at)) {
+      bytes.replace(at, from.size(), to);
+    }
+    const std::string bad = dir_ + "/other_type.mcap";
+    std::ofstream(bad, std::ios::binary) << bytes;
+    return bad;
+  };
+  std::string bad = retyped("--unchunked --no-summary");
   test::RunResult r = import(bad, dir_ + "/imported_type", "--imu /imu");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find(bad + ": topic /imu has type sensor_msgs/msg/Imx, expected sensor_msgs/msg/Imu"), std::string::npos)
       << r.err;
+  // With a summary, its CRC32 (the writer's) sees the change there.
+  bad = retyped("--unchunked");
+  r = import(bad, dir_ + "/imported_type");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find(bad + ": offset "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("summary CRC32"), std::string::npos) << r.err;
   // A ROS 2 sqlite3 bag: not read, with the way to MCAP.
   const std::string db3 = dir_ + "/bag_0.db3";
   std::ofstream(db3, std::ios::binary) << std::string("SQLite format 3\0", 16) << std::string(100, '\0');

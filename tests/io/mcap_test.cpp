@@ -136,6 +136,32 @@ TEST(McapReaderTest, WithASummaryTheIndexesAreRead) {
   EXPECT_THROW(r->check_type("/imu", "sensor_msgs/PointCloud2"), Error);
 }
 
+// `f` with the footer's summary CRC32 set: over the summary up to the footer's summary_offset_start.
+std::string with_summary_crc(std::string f) {
+  const std::size_t footer = f.size() - kMagic.size() - 29;
+  std::uint64_t summary = 0;
+  std::memcpy(&summary, f.data() + footer + 9, 8);
+  const std::uint32_t crc = crc32_of(f.substr(summary, footer + 25 - summary));
+  std::memcpy(&f[footer + 25], &crc, 4);
+  return f;
+}
+
+TEST(McapReaderTest, TheSummaryCrcIsChecked) {
+  const std::string f = with_summary_crc(indexed_file());
+  EXPECT_EQ(messages(*reader(f)), kInOrder);
+  std::string bad = f;
+  const std::size_t footer = f.size() - kMagic.size() - 29;
+  bad[footer - 20] = static_cast<char>(bad[footer - 20] ^ 1);  // in the chunk index
+  try {
+    reader(bad);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("test.mcap: offset " + std::to_string(footer) + ": summary CRC32"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(McapReaderTest, MessagesOutsideChunks) {
   const std::string f = kMagic + header() + schema() + channel() + message(10, "a") + message(20, "b") + data_end() +
                         footer(0) + kMagic;

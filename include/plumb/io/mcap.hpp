@@ -6,7 +6,8 @@
 ///        channels (topic, message encoding), the topic list with counts and rates, and the messages
 ///        of chosen channels, streamed chunk by chunk so that a file of any size needs about one
 ///        chunk of memory. Chunk compression: none, lz4 (the LZ4 frame format) and zstd; a chunk's
-///        uncompressed CRC32 is checked when it is not 0.
+///        uncompressed CRC32 and the summary's CRC32 (in the footer) are checked when not 0. The data
+///        section's CRC32 (in DataEnd) is not: it would mean reading the whole file to open it.
 ///
 /// With a summary section the schemas, channels, statistics and chunk indexes come from it (and the
 /// per-topic times from the message indexes); without one (summary_start 0) opening scans the whole
