@@ -165,6 +165,39 @@ TEST_F(ImportMcapCliTest, EveryVariantGivesBackTheDump) {
   }
 }
 
+TEST_F(ImportMcapCliTest, DriverLayoutsVelodyneAndOuster) {
+  const io::FrameDumpReader want(dump());
+  const std::string velodyne = dir_ + "/imported_velodyne";
+  test::RunResult r = import(mcap("lz4", "velodyne", 3), velodyne);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const io::FrameDumpReader got_velodyne(velodyne);
+  ASSERT_EQ(got_velodyne.num_frames(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    const PointCloud a = got_velodyne.frame(i), b = want.frame(i);
+    ASSERT_EQ(a.size(), b.size()) << i;
+    EXPECT_EQ(std::memcmp(a.points.data(), b.points.data(), a.size() * sizeof(Vector3f)), 0) << i;
+    EXPECT_EQ(a.rings, b.rings) << i;
+    EXPECT_EQ(std::memcmp(a.times.data(), b.times.data(), a.size() * sizeof(float)), 0) << i;
+  }
+  // `t` in integer nanoseconds, reflectivity beside intensity, a NaN point after every 7th (dropped).
+  const std::string ouster = dir_ + "/imported_ouster";
+  r = import(mcap("zstd", "ouster", 3), ouster, "--json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const io::FrameDumpReader got(ouster);
+  ASSERT_EQ(got.num_frames(), 3u);
+  std::size_t nan_points = 0;
+  for (std::size_t i = 0; i < 3; ++i) {
+    const PointCloud a = got.frame(i), b = want.frame(i);
+    ASSERT_EQ(a.size(), b.size()) << i;
+    nan_points += (b.size() - 1) / 7;
+    EXPECT_EQ(std::memcmp(a.points.data(), b.points.data(), a.size() * sizeof(Vector3f)), 0) << i;
+    EXPECT_EQ(std::memcmp(a.intensities.data(), b.intensities.data(), a.size() * sizeof(float)), 0) << i;
+    EXPECT_EQ(a.rings, b.rings) << i;
+    for (std::size_t k = 0; k < a.size(); ++k) ASSERT_NEAR(a.times[k], b.times[k], 1e-9) << i << ' ' << k;
+  }
+  EXPECT_EQ(Json::parse(r.out)["nonfinite_points"], nan_points);
+}
+
 TEST_F(ImportMcapCliTest, ListCountsWhatTheFileHolds) {
   const io::FrameDumpReader want(dump());
   const std::string path = mcap("zstd", "pcd", 6);

@@ -11,7 +11,11 @@
 //
 // Layouts of the clouds: "pcd" sends the PCD records as they are; "unusual" reorders the fields,
 // pads point_step, stores x y z as float64 and splits the points in two rows with padding at each
-// row's end; "unusual-be" is "unusual" with big-endian point data.
+// row's end; "unusual-be" is "unusual" with big-endian point data; "velodyne" is
+// velodyne_pointcloud's PointXYZIRT (x y z, padding, intensity float32, ring uint16, time float32
+// [s], point_step 32); "ouster" is ouster_ros's point (x y z, padding, intensity float32, t uint32
+// [ns], reflectivity uint16, ring uint16, ambient uint16, range uint32, point_step 48) with a NaN
+// point after every 7th one.
 //
 // usage: node mcap_from_dump.cjs DUMP OUT.mcap [--compression none|lz4|zstd] [--layout L]
 //                               [--frames N] [--no-tf-static] [--unchunked] [--no-summary]
@@ -78,7 +82,9 @@ function args() {
   }
   if (positional.length !== 2) throw new Error('usage: mcap_from_dump.cjs DUMP OUT.mcap [options]');
   if (!['none', 'lz4', 'zstd'].includes(a.compression)) throw new Error('--compression none|lz4|zstd');
-  if (!['pcd', 'unusual', 'unusual-be'].includes(a.layout)) throw new Error('--layout pcd|unusual|unusual-be');
+  if (!['pcd', 'unusual', 'unusual-be', 'velodyne', 'ouster'].includes(a.layout)) {
+    throw new Error('--layout pcd|unusual|unusual-be|velodyne|ouster');
+  }
   [a.dump, a.out] = positional;
   return a;
 }
@@ -173,6 +179,52 @@ function cloudMessage(stamp, pcd, layout) {
   return msg;
 }
 
+// name, ROS type, offset; point_step of the drivers' layouts.
+const DRIVER_LAYOUTS = {
+  velodyne: [[['x', 7, 0], ['y', 7, 4], ['z', 7, 8], ['intensity', 7, 16], ['ring', 4, 20], ['time', 7, 24]], 32],
+  ouster: [[['x', 7, 0], ['y', 7, 4], ['z', 7, 8], ['intensity', 7, 16], ['t', 6, 20], ['reflectivity', 4, 24],
+    ['ring', 4, 26], ['ambient', 4, 28], ['range', 6, 32]], 48],
+};
+
+function driverCloudMessage(stamp, pcd, layout) {
+  const [fields, pointStep] = DRIVER_LAYOUTS[layout];
+  const src = new DataView(pcd.data.buffer, pcd.data.byteOffset, pcd.data.length);
+  const srcOffset = {};
+  let o = 0;
+  pcd.names.forEach((name, i) => { srcOffset[name] = [o, pcd.kinds[i]]; o += Number(pcd.kinds[i].slice(1)); });
+  const value = (name, p) => read(src, srcOffset[name][1], p * pcd.step + srcOffset[name][0]);
+  const keep = [];  // source point, or -1 for a NaN point (ouster: after every 7th)
+  for (let i = 0; i < pcd.n; ++i) {
+    if (layout === 'ouster' && i > 0 && i % 7 === 0) keep.push(-1);
+    keep.push(i);
+  }
+  const out = new Uint8Array(pointStep * keep.length);
+  const dst = new DataView(out.buffer);
+  const offset = Object.fromEntries(fields.map(([name, , off]) => [name, off]));
+  keep.forEach((p, k) => {
+    const at = k * pointStep;
+    if (p < 0) {
+      for (const name of ['x', 'y', 'z']) dst.setFloat32(at + offset[name], NaN, true);
+      return;
+    }
+    for (const name of ['x', 'y', 'z', 'intensity']) dst.setFloat32(at + offset[name], value(name, p), true);
+    dst.setUint16(at + offset.ring, value('ring', p), true);
+    if (layout === 'velodyne') {
+      dst.setFloat32(at + offset.time, value('time', p), true);
+    } else {
+      dst.setUint32(at + offset.t, Math.round(value('time', p) * 1e9), true);
+      dst.setUint16(at + offset.reflectivity, Math.min(Math.trunc(value('intensity', p)), 65535), true);
+      const x = value('x', p), y = value('y', p), z = value('z', p);
+      dst.setUint32(at + offset.range, Math.trunc(Math.sqrt(x * x + y * y + z * z) * 1000), true);
+    }
+  });
+  const t = rosTime(stamp);
+  return { header: { stamp: { sec: t.sec, nanosec: t.nanosec }, frame_id: 'lidar' },
+    fields: fields.map(([name, datatype, off]) => ({ name, offset: off, datatype, count: 1 })),
+    height: 1, width: keep.length, is_bigendian: false, point_step: pointStep, row_step: pointStep * keep.length,
+    data: out, is_dense: layout !== 'ouster' };
+}
+
 // A PointCloud2 in big-endian CDR, written field by field (MessageWriter writes little-endian).
 function cloudBigEndian(m) {
   const w = new CdrWriter({ kind: EncapsulationKind.CDR_BE, size: m.data.length + 4096 });
@@ -243,7 +295,8 @@ async function main() {
       transform(first, 'base_link', 'imu', meta.T_base_imu)] }]);
   }
   for (const [, stamp, name] of frames) {
-    messages.push([Number(stamp), 3, '/points', cloudMessage(Number(stamp), readPcd(path.join(a.dump, name)), a.layout)]);
+    const make = DRIVER_LAYOUTS[a.layout] ? driverCloudMessage : cloudMessage;
+    messages.push([Number(stamp), 3, '/points', make(Number(stamp), readPcd(path.join(a.dump, name)), a.layout)]);
   }
   messages.sort((p, q) => p[0] - q[0] || p[1] - q[1]);
 
