@@ -3,7 +3,9 @@
 // (page cache warm after the first run) and every sensor_msgs/PointCloud2 decoded into a
 // PointCloud, single thread. The bag is built here: 40 sweeps of a 16-line LiDAR (1800 columns, 28800
 // points) in velodyne_pointcloud's PointXYZIRT layout (x y z, padding, intensity, ring, time; 32
-// bytes a point), one message per chunk, about 37 MB. Bytes/s is of the bag file.
+// bytes a point), one message per chunk, about 37 MB. Bytes/s is of the bag file. The same sweeps as
+// sensor_msgs/msg/PointCloud2 in CDR in an MCAP file (uncompressed chunks with their CRC32, one
+// message per chunk, a summary of chunk indexes) read with io::McapReader.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -12,15 +14,17 @@
 #include <string>
 #include <vector>
 
+#include "plumb/io/mcap.hpp"
 #include "plumb/io/ros_messages.hpp"
 #include "plumb/io/rosbag.hpp"
+#include "mcap_builder.hpp"
 #include "rosbag_builder.hpp"
 
 namespace {
 
 constexpr int kFrames = 40, kColumns = 1800, kRings = 16;
 
-std::string velodyne_sweep(int frame) {
+std::string velodyne_points(int frame) {
   std::string data;
   data.reserve(std::size_t{kColumns} * kRings * 32);
   for (int c = 0; c < kColumns; ++c) {
@@ -40,6 +44,11 @@ std::string velodyne_sweep(int frame) {
       data += p.s;
     }
   }
+  return data;
+}
+
+std::string velodyne_sweep(int frame) {
+  const std::string data = velodyne_points(frame);
   return plumb::test::ros_point_cloud2(100 + frame / 10, (frame % 10) * 100000000, 1, kColumns * kRings,
                                        {{"x", 0, 7}, {"y", 4, 7}, {"z", 8, 7}, {"intensity", 16, 7}, {"ring", 20, 4},
                                         {"time", 24, 7}},
@@ -80,6 +89,56 @@ void BM_ImportBag(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * points));
 }
 BENCHMARK(BM_ImportBag)->Name("import_bag/plumb/velodyne_uncompressed")->Unit(benchmark::kMillisecond);
+
+const std::string& mcap_path() {
+  static const std::string path = [] {
+    namespace t = plumb::test;
+    std::string f = t::kMcapMagicBytes + t::mcap_header();
+    std::string indexes;
+    for (int frame = 0; frame < kFrames; ++frame) {
+      const std::int32_t sec = 100 + frame / 10;
+      const std::uint32_t nsec = static_cast<std::uint32_t>((frame % 10) * 100000000);
+      const std::string cloud = t::cdr_point_cloud2(
+          false, sec, nsec, 1, kColumns * kRings,
+          {{"x", 0, 7}, {"y", 4, 7}, {"z", 8, 7}, {"intensity", 16, 7}, {"ring", 20, 4}, {"time", 24, 7}}, false, 32,
+          32 * kColumns * kRings, velodyne_points(frame));
+      const std::uint64_t time = static_cast<std::uint64_t>(sec) * 1000000000 + nsec;
+      std::string records = frame == 0 ? t::mcap_schema(1, "sensor_msgs/msg/PointCloud2") + t::mcap_channel(1, 1, "/points") : "";
+      records += t::mcap_message(1, time, cloud);
+      const std::uint64_t pos = f.size();
+      f += t::mcap_chunk(records, time, time);
+      indexes += t::mcap_chunk_index(time, time, pos, f.size() - pos);
+    }
+    f += t::mcap_data_end();
+    const std::uint64_t summary = f.size();
+    f += t::mcap_schema(1, "sensor_msgs/msg/PointCloud2") + t::mcap_channel(1, 1, "/points") + indexes;
+    f += t::mcap_footer(summary) + t::kMcapMagicBytes;
+    const std::string p = "/tmp/plumb_import_bench.mcap";
+    std::ofstream(p, std::ios::binary) << f;
+    return p;
+  }();
+  return path;
+}
+
+void BM_ImportMcap(benchmark::State& state) {
+  const std::string& path = mcap_path();
+  std::uint64_t bytes = 0;
+  std::size_t points = 0;
+  for (auto _ : state) {
+    const plumb::io::McapReader mcap(path);
+    bytes = mcap.file_size();
+    points = 0;
+    mcap.read_topics({"/points"}, [&](const plumb::io::RecordedMessage& m) {
+      const plumb::io::RosPointCloud2 pc = plumb::io::decode_point_cloud2(m.data, m.size, m.serialization);
+      points += pc.cloud.size();
+      benchmark::DoNotOptimize(pc.cloud.points.data());
+      return true;
+    });
+  }
+  state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations() * bytes));
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * points));
+}
+BENCHMARK(BM_ImportMcap)->Name("import_mcap/plumb/velodyne_uncompressed")->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

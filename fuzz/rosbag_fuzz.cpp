@@ -34,6 +34,8 @@ void decode(const plumb::io::BagMessage& m) {
       plumb::io::decode_odometry(m.data, m.size);
     } else if (type == "tf2_msgs/TFMessage") {
       plumb::io::decode_tf_message(m.data, m.size);
+    } else if (type == "sensor_msgs/JointState") {
+      plumb::io::decode_joint_state(m.data, m.size);
     }
   } catch (const plumb::Error&) {
   }

@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// `plumb import BAG -o DUMP [--lidar TOPIC] [--imu TOPIC] [--odom TOPIC] [--base-frame NAME]
-// [--T-base-lidar x y z roll pitch yaw] [--T-base-imu ...] [--start S] [--duration S] [--json]`:
-// a ROS 1 bag (sensor_msgs/PointCloud2, sensor_msgs/Imu, nav_msgs/Odometry, /tf_static) becomes a
-// frame dump. `plumb import BAG --list` prints the bag's topics as `rosbag info` does. The bag is
-// read chunk by chunk: /tf_static first, then the chosen topics in bag order; frames are written as
-// they are read. DUMP is staged and moved into place as `plumb simulate` does (OutputDir).
+// `plumb import BAG -o DUMP [--lidar TOPIC] [--imu TOPIC] [--odom TOPIC] [--wheels TOPIC --wheel-joints L R]
+// [--base-frame NAME] [--T-base-lidar x y z roll pitch yaw] [--T-base-imu ...] [--start S] [--duration S] [--json]`:
+// a ROS 1 bag or a ROS 2 bag in MCAP (sensor_msgs/PointCloud2, sensor_msgs/Imu, nav_msgs/Odometry,
+// /tf_static; in ROS 2 sensor_msgs/msg/PointCloud2, ...) becomes a frame dump. `plumb import BAG
+// --list` prints the bag's topics as `rosbag info` does. The bag is read chunk by chunk: /tf_static
+// first, then the chosen topics in bag order (MCAP: log-time order); frames are written as they are
+// read. DUMP is staged and moved into place as `plumb simulate` does (OutputDir).
 
 #include <unistd.h>
 
@@ -27,14 +28,15 @@
 #include "run_output.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/io/frame_dump.hpp"
+#include "plumb/io/recording.hpp"
 #include "plumb/io/ros_messages.hpp"
-#include "plumb/io/rosbag.hpp"
 
 namespace plumb::cli {
 namespace {
 
 struct ImportOptions {
-  std::string bag, output, lidar, imu, odom, base_frame = "base_link";
+  std::string bag, output, lidar, imu, odom, wheels, base_frame = "base_link";
+  std::vector<std::string> wheel_joints;  // left, right (with --wheels)
   std::vector<double> T_base_lidar, T_base_imu;  // x y z roll pitch yaw, empty = from /tf_static
   double start = 0.0;
   double duration = std::numeric_limits<double>::infinity();
@@ -51,21 +53,12 @@ Eigen::Isometry3d from_xyz_rpy(const std::vector<double>& v) {
   return T;
 }
 
-// The connections of `topic`, each checked to carry `type` with its known md5sum.
-std::vector<std::uint32_t> topic_connections(const io::BagReader& bag, const std::string& topic, const char* type) {
-  std::vector<std::uint32_t> ids;
-  for (const io::BagConnection& c : bag.connections()) {
-    if (c.topic != topic) continue;
-    PLUMB_CHECK(c.type == type, bag.path() << ": topic " << topic << " has type " << c.type << ", expected " << type);
-    const char* md5 = io::ros_known_md5sum(c.type);
-    PLUMB_CHECK(md5 != nullptr && c.md5sum == md5,
-                bag.path() << ": topic " << topic << ": md5sum " << c.md5sum << " of " << c.type << " (connection "
-                           << c.id << ", from its first message) differs from the known "
-                           << (md5 ? md5 : "?")
-                           << ": another version of the message, which plumb does not decode");
-    ids.push_back(c.id);
-  }
-  return ids;
+// `topic` (when the recording has it and it is not empty), checked to carry `type` in the version
+// the decoders read.
+std::vector<std::string> checked_topic(const io::Recording& bag, const std::string& topic, const char* type) {
+  if (topic.empty()) return {};
+  bag.check_type(topic, type);
+  return {topic};
 }
 
 // The topic to read: the one given (which must exist), else the only one of `type`, else none
@@ -74,7 +67,7 @@ std::string choose_topic(const std::vector<io::BagTopic>& topics, const std::str
                          const char* option, bool required, const std::string& path) {
   std::vector<std::string> of_type;
   for (const io::BagTopic& t : topics) {
-    if (t.type == type) of_type.push_back(t.topic);
+    if (io::ros1_type_name(t.type) == type) of_type.push_back(t.topic);
   }
   if (!given.empty()) {
     const bool exists = std::any_of(topics.begin(), topics.end(), [&](const io::BagTopic& t) { return t.topic == given; });
@@ -90,14 +83,15 @@ std::string choose_topic(const std::vector<io::BagTopic>& topics, const std::str
   return "";
 }
 
-void print_list(const io::BagReader& bag, bool json) {
+void print_list(const io::Recording& bag, bool json) {
   const std::vector<io::BagTopic> topics = bag.topics();
   const double start = bag.start_time().seconds(), end = bag.end_time().seconds();
   const auto compression = bag.compression();
   if (json) {
-    nlohmann::json j = {{"path", bag.path()},   {"version", "2.0"},     {"size", bag.file_size()},
+    nlohmann::json j = {{"path", bag.path()},   {"format", bag.format()}, {"size", bag.file_size()},
                         {"start", start},       {"end", end},           {"duration", end - start},
                         {"messages", bag.num_messages()}, {"chunks", bag.num_chunks()}};
+    if (bag.format() == "ROS 1 bag 2.0") j["version"] = "2.0";
     for (const auto& c : compression) j["compression"][c.first] = c.second;
     j["topics"] = nlohmann::json::array();
     for (const io::BagTopic& t : topics) {
@@ -107,8 +101,8 @@ void print_list(const io::BagReader& bag, bool json) {
     std::cout << j.dump(2) << '\n';
     return;
   }
-  std::printf("path:        %s\nversion:     2.0\nduration:    %.3f s\nstart:       %.9f\nend:         %.9f\n",
-              bag.path().c_str(), end - start, start, end);
+  std::printf("path:        %s\nformat:      %s\nduration:    %.3f s\nstart:       %.9f\nend:         %.9f\n",
+              bag.path().c_str(), bag.format().c_str(), end - start, start, end);
   std::printf("size:        %llu bytes\nmessages:    %llu\ncompression:",
               static_cast<unsigned long long>(bag.file_size()), static_cast<unsigned long long>(bag.num_messages()));
   for (const auto& c : compression) std::printf(" %s [%zu/%zu chunks]", c.first.c_str(), c.second, bag.num_chunks());
@@ -121,8 +115,9 @@ void print_list(const io::BagReader& bag, bool json) {
 
 // What import() found and wrote.
 struct ImportSummary {
-  std::string lidar, imu, odom;
-  std::size_t frames = 0, points = 0, nonfinite = 0, skipped_frames = 0, imu_samples = 0, odometry = 0;
+  std::string lidar, imu, odom, wheels;
+  std::size_t frames = 0, points = 0, nonfinite = 0, skipped_frames = 0, imu_samples = 0, odometry = 0,
+              wheel_readings = 0;
   std::string T_base_lidar_from, T_base_imu_from;
   bool times = true;
 };
@@ -154,39 +149,38 @@ Eigen::Isometry3d extrinsic(const std::vector<double>& given, const std::vector<
 
 // Prefix a decoder's error with the bag, the topic and the message.
 template <class F>
-auto decoding(const io::BagMessage& m, std::size_t index, F&& f) {
+auto decoding(const io::RecordedMessage& m, std::size_t index, F&& f) {
   try {
     return f();
   } catch (const plumb::Error& e) {
-    PLUMB_THROW(m.connection->topic << " message " << index << " (chunk at offset " << m.chunk_offset
+    PLUMB_THROW(*m.topic << " message " << index << " (chunk at offset " << m.chunk_offset
                                     << ", record at " << m.offset << "): " << e.what());
   }
 }
 
 // meta.json: the extrinsics (options, else /tf_static to the frames of the sensors' first
 // messages) and the rates of the topics.
-io::FrameDumpMeta dump_meta(const ImportOptions& o, const io::BagReader& bag, const std::vector<io::BagTopic>& topics,
-                            const std::vector<std::uint32_t>& lidar_ids, const std::vector<std::uint32_t>& imu_ids,
+io::FrameDumpMeta dump_meta(const ImportOptions& o, const io::Recording& bag, const std::vector<io::BagTopic>& topics,
                             ImportSummary& s) {
   std::vector<io::RosTransform> tf;
   std::size_t index = 0;
-  bag.read(topic_connections(bag, "/tf_static", "tf2_msgs/TFMessage"), [&](const io::BagMessage& m) {
-    const auto t = decoding(m, index++, [&] { return io::decode_tf_message(m.data, m.size); });
+  bag.read_topics(checked_topic(bag, "/tf_static", "tf2_msgs/TFMessage"), [&](const io::RecordedMessage& m) {
+    const auto t = decoding(m, index++, [&] { return io::decode_tf_message(m.data, m.size, m.serialization); });
     tf.insert(tf.end(), t.begin(), t.end());
     return true;
   });
   // The frames of the sensors: from their first messages.
   std::string lidar_frame, imu_frame;
-  bool have_lidar = false, have_imu = imu_ids.empty();
-  std::vector<std::uint32_t> first_ids = lidar_ids;
-  first_ids.insert(first_ids.end(), imu_ids.begin(), imu_ids.end());
-  bag.read(first_ids, [&](const io::BagMessage& m) {
-    const bool is_lidar = m.connection->topic == s.lidar;
+  bool have_lidar = false, have_imu = s.imu.empty();
+  std::vector<std::string> first_topics = {s.lidar};
+  if (!s.imu.empty()) first_topics.push_back(s.imu);
+  bag.read_topics(first_topics, [&](const io::RecordedMessage& m) {
+    const bool is_lidar = *m.topic == s.lidar;
     if (is_lidar && !have_lidar) {
-      lidar_frame = decoding(m, 0, [&] { return io::decode_point_cloud2(m.data, m.size).header.frame_id; });
+      lidar_frame = decoding(m, 0, [&] { return io::decode_point_cloud2(m.data, m.size, m.serialization).header.frame_id; });
       have_lidar = true;
     } else if (!is_lidar && !have_imu) {
-      imu_frame = decoding(m, 0, [&] { return io::decode_imu(m.data, m.size).header.frame_id; });
+      imu_frame = decoding(m, 0, [&] { return io::decode_imu(m.data, m.size, m.serialization).header.frame_id; });
       have_imu = true;
     }
     return !(have_lidar && have_imu);
@@ -204,16 +198,37 @@ io::FrameDumpMeta dump_meta(const ImportOptions& o, const io::BagReader& bag, co
   return meta;
 }
 
-ImportSummary import_bag(const ImportOptions& o, const io::BagReader& bag) {
+// The wheel angles of a sensor_msgs/JointState: the positions of the joints `joints` (left, right).
+WheelEncoderReading wheel_reading(const io::RecordedMessage& m, std::size_t index, const std::vector<std::string>& joints) {
+  return decoding(m, index, [&] {
+    const io::RosJointState js = io::decode_joint_state(m.data, m.size, m.serialization);
+    WheelEncoderReading r;
+    r.stamp = js.header.stamp.seconds();
+    for (int side = 0; side < 2; ++side) {
+      const auto at = std::find(js.name.begin(), js.name.end(), joints[side]);
+      PLUMB_CHECK(at != js.name.end(), "no joint '" << joints[side] << "' (--wheel-joints)");
+      PLUMB_CHECK(!js.position.empty(), "no positions");
+      (side == 0 ? r.left : r.right) = js.position[static_cast<std::size_t>(at - js.name.begin())];
+    }
+    return r;
+  });
+}
+
+ImportSummary import_bag(const ImportOptions& o, const io::Recording& bag) {
   ImportSummary s;
   const std::vector<io::BagTopic> topics = bag.topics();
   s.lidar = choose_topic(topics, o.lidar, "sensor_msgs/PointCloud2", "--lidar", true, o.bag);
   s.imu = choose_topic(topics, o.imu, "sensor_msgs/Imu", "--imu", false, o.bag);
   s.odom = choose_topic(topics, o.odom, "nav_msgs/Odometry", "--odom", false, o.bag);
-  const std::vector<std::uint32_t> lidar_ids = topic_connections(bag, s.lidar, "sensor_msgs/PointCloud2");
-  const std::vector<std::uint32_t> imu_ids = topic_connections(bag, s.imu, "sensor_msgs/Imu");
-  const std::vector<std::uint32_t> odom_ids = topic_connections(bag, s.odom, "nav_msgs/Odometry");
-  io::FrameDumpMeta meta = dump_meta(o, bag, topics, lidar_ids, imu_ids, s);
+  std::vector<std::string> ids = checked_topic(bag, s.lidar, "sensor_msgs/PointCloud2");
+  for (const std::string& t : checked_topic(bag, s.imu, "sensor_msgs/Imu")) ids.push_back(t);
+  for (const std::string& t : checked_topic(bag, s.odom, "nav_msgs/Odometry")) ids.push_back(t);
+  if (!o.wheels.empty()) {
+    PLUMB_CHECK(o.wheel_joints.size() == 2, "import: --wheels needs --wheel-joints LEFT RIGHT (the joint names)");
+    s.wheels = choose_topic(topics, o.wheels, "sensor_msgs/JointState", "--wheels", true, o.bag);
+    for (const std::string& t : checked_topic(bag, s.wheels, "sensor_msgs/JointState")) ids.push_back(t);
+  }
+  io::FrameDumpMeta meta = dump_meta(o, bag, topics, s);
   meta.source = "plumb import " + o.bag.substr(o.bag.find_last_of('/') + 1) + " (" + s.lidar + ")";
 
   OutputDir out(o.output, "import", frame_dump_names(), o.overwrite, false);
@@ -222,20 +237,18 @@ ImportSummary import_bag(const ImportOptions& o, const io::BagReader& bag) {
   const double end_s = static_cast<double>(begin_ns) * 1e-9 + o.duration;
   std::vector<io::ImuSample> imu;
   std::vector<io::OdomSample> odom;
-  std::vector<std::uint32_t> ids = lidar_ids;
-  ids.insert(ids.end(), imu_ids.begin(), imu_ids.end());
-  ids.insert(ids.end(), odom_ids.begin(), odom_ids.end());
-  std::size_t lidar_index = 0, imu_index = 0, odom_index = 0;
+  std::vector<WheelEncoderReading> wheels;
+  std::size_t lidar_index = 0, imu_index = 0, odom_index = 0, wheel_index = 0;
   double last_stamp = -std::numeric_limits<double>::infinity();
   const bool tty = isatty(fileno(stderr)) != 0;
-  bag.read(
+  bag.read_topics(
       ids,
-      [&](const io::BagMessage& m) {
+      [&](const io::RecordedMessage& m) {
         if (m.time.nanoseconds() < begin_ns) return true;
         if (m.time.seconds() > end_s) return true;
-        const std::string& topic = m.connection->topic;
+        const std::string& topic = *m.topic;
         if (topic == s.lidar) {
-          io::RosPointCloud2 pc = decoding(m, lidar_index++, [&] { return io::decode_point_cloud2(m.data, m.size); });
+          io::RosPointCloud2 pc = decoding(m, lidar_index++, [&] { return io::decode_point_cloud2(m.data, m.size, m.serialization); });
           const std::vector<std::size_t> finite = pc.cloud.finite_indices();
           s.nonfinite += pc.cloud.size() - finite.size();
           if (finite.size() < pc.cloud.size()) pc.cloud = pc.cloud.select(finite);
@@ -253,9 +266,11 @@ ImportSummary import_bag(const ImportOptions& o, const io::BagReader& bag) {
           ++s.frames;
           s.points += pc.cloud.size();
         } else if (topic == s.imu) {
-          imu.push_back(decoding(m, imu_index++, [&] { return io::decode_imu(m.data, m.size); }).sample);
+          imu.push_back(decoding(m, imu_index++, [&] { return io::decode_imu(m.data, m.size, m.serialization); }).sample);
+        } else if (topic == s.wheels) {
+          wheels.push_back(wheel_reading(m, wheel_index++, o.wheel_joints));
         } else {
-          const io::RosOdometry od = decoding(m, odom_index++, [&] { return io::decode_odometry(m.data, m.size); });
+          const io::RosOdometry od = decoding(m, odom_index++, [&] { return io::decode_odometry(m.data, m.size, m.serialization); });
           const Eigen::Matrix3d R = od.pose.linear();
           io::OdomSample sample;
           sample.stamp = od.header.stamp.seconds();
@@ -274,28 +289,32 @@ ImportSummary import_bag(const ImportOptions& o, const io::BagReader& bag) {
               << " has no per-point time field (time, t or timestamp): times synthesised from the azimuth, one turn in "
               << 1.0 / (meta.lidar.rate_hz > 0 ? meta.lidar.rate_hz : 10.0) << " s\n";
   }
-  const std::size_t dropped = sort_unique(imu) + sort_unique(odom);
-  if (dropped > 0) std::cerr << "plumb: warning: " << dropped << " IMU / odometry messages with a repeated stamp dropped\n";
+  const std::size_t dropped = sort_unique(imu) + sort_unique(odom) + sort_unique(wheels);
+  if (dropped > 0) {
+    std::cerr << "plumb: warning: " << dropped << " IMU / odometry / wheel messages with a repeated stamp dropped\n";
+  }
   if (s.skipped_frames > 0) {
     std::cerr << "plumb: warning: " << s.skipped_frames << " frames whose stamp does not increase were skipped\n";
   }
   if (!s.imu.empty()) writer.write_imu(imu);
   if (!s.odom.empty()) writer.write_odometry(odom);
+  if (!s.wheels.empty()) writer.write_wheels(wheels);
   writer.close();
   out.commit();
   s.imu_samples = imu.size();
   s.odometry = odom.size();
+  s.wheel_readings = wheels.size();
   return s;
 }
 
 void run_import(const ImportOptions& o) {
-  const io::BagReader bag(o.bag);
+  const std::unique_ptr<io::Recording> bag = io::open_recording(o.bag);
   if (o.list) {
-    print_list(bag, o.json);
+    print_list(*bag, o.json);
     return;
   }
   PLUMB_CHECK(!o.output.empty(), "import: give the output frame dump with -o DUMP (or --list)");
-  const ImportSummary s = import_bag(o, bag);
+  const ImportSummary s = import_bag(o, *bag);
   if (o.json) {
     nlohmann::json j = {{"lidar", s.lidar},
                         {"imu", s.imu},
@@ -306,6 +325,8 @@ void run_import(const ImportOptions& o) {
                         {"skipped_frames", s.skipped_frames},
                         {"imu_samples", s.imu_samples},
                         {"odometry", s.odometry},
+                        {"wheels", s.wheels},
+                        {"wheel_readings", s.wheel_readings},
                         {"point_times", s.times},
                         {"T_base_lidar_from", s.T_base_lidar_from},
                         {"T_base_imu_from", s.T_base_imu_from},
@@ -321,13 +342,18 @@ void run_import(const ImportOptions& o) {
 
 void register_import_command(CLI::App& app) {
   auto opts = std::make_shared<ImportOptions>();
-  CLI::App* cmd = app.add_subcommand("import", "Import a ROS 1 bag (format 2.0) as a frame dump, or list its topics");
-  cmd->add_option("bag", opts->bag, "ROS 1 bag (.bag); ROS 2 bags (MCAP, sqlite3) are not read")->required();
+  CLI::App* cmd = app.add_subcommand("import", "Import a ROS 1 bag or a ROS 2 bag in MCAP as a frame dump, or list its topics");
+  cmd->add_option("bag", opts->bag, "ROS 1 bag (.bag, format 2.0) or ROS 2 bag in MCAP (.mcap); sqlite3 (.db3) is not read")
+      ->required();
   cmd->add_option("-o,--output", opts->output, "Output frame dump directory");
   cmd->add_flag("--list", opts->list, "List the bag's topics (type, messages, rate) instead of importing");
   cmd->add_option("--lidar", opts->lidar, "sensor_msgs/PointCloud2 topic (default: the only one)");
   cmd->add_option("--imu", opts->imu, "sensor_msgs/Imu topic (default: the only one, if any)");
   cmd->add_option("--odom", opts->odom, "nav_msgs/Odometry topic for odom.csv (default: the only one, if any)");
+  cmd->add_option("--wheels", opts->wheels,
+                  "sensor_msgs/JointState topic of the wheel angles for wheels.csv (needs --wheel-joints)");
+  cmd->add_option("--wheel-joints", opts->wheel_joints, "The left and right wheel joints' names in --wheels")
+      ->expected(2);
   cmd->add_option("--base-frame", opts->base_frame, "The robot's base frame in /tf_static (default base_link)");
   cmd->add_option("--T-base-lidar", opts->T_base_lidar,
                   "LiDAR mounting: x y z [m] roll pitch yaw [rad] (default: from /tf_static)")

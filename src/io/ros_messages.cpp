@@ -10,6 +10,8 @@
 //                              float64[9]
 //   nav_msgs/Odometry          Header, string child_frame_id, Pose (Point, Quaternion x y z w),
 //                              float64[36], Twist (Vector3 linear, Vector3 angular), float64[36]
+//   sensor_msgs/JointState     Header, string[] name, float64[] position, float64[] velocity,
+//                              float64[] effort
 //   tf2_msgs/TFMessage         TransformStamped[]: Header, string child_frame_id,
 //                              Transform (Vector3 translation, Quaternion rotation)
 #include "plumb/io/ros_messages.hpp"
@@ -27,10 +29,20 @@ namespace {
 
 const char* chars(const std::uint8_t* p) { return reinterpret_cast<const char*>(p); }
 
-// Bounds-checked reader of a serialized message.
+// Bounds-checked reader of a serialized message: ROS 1 (little-endian, packed) or CDR (the
+// encapsulation header's byte order; a primitive of k bytes aligned to k from the header's end).
 class Cursor {
  public:
-  Cursor(const std::uint8_t* p, std::size_t n, const char* type) : p_(p), n_(n), type_(type) {}
+  Cursor(const std::uint8_t* p, std::size_t n, const char* type, RosSerialization s)
+      : p_(p), n_(n), type_(type), cdr_(s == RosSerialization::kCdr) {
+    if (!cdr_) return;
+    const std::uint8_t* e = take(4, "the CDR encapsulation header");
+    PLUMB_CHECK(e[0] == 0 && (e[1] == 0 || e[1] == 1),
+                type_ << ": CDR encapsulation " << int(e[0]) << ' ' << int(e[1])
+                      << " (plain CDR, 0 0 big-endian or 0 1 little-endian, is read)");
+    swap_ = e[1] == 0;  // plumb runs on little-endian hosts (as cloud_detail::load assumes)
+    origin_ = 4;
+  }
   const std::uint8_t* take(std::size_t k, const char* what) {
     PLUMB_CHECK(k <= n_ - i_, type_ << ": message cut short reading " << what << " (needs " << k << " bytes at byte "
                                     << i_ << ", message has " << n_ << ')');
@@ -38,13 +50,25 @@ class Cursor {
     i_ += k;
     return at;
   }
+  // CDR: skip the padding before a primitive of k bytes.
+  void align(std::size_t k, const char* what) {
+    if (cdr_ && (i_ - origin_) % k != 0) take(k - (i_ - origin_) % k, what);
+  }
+  template <class T>
+  T num(const char* what) {
+    align(sizeof(T), what);
+    const char* b = chars(take(sizeof(T), what));
+    return swap_ ? cloud_detail::load_swapped<T>(b) : cloud_detail::load<T>(b);
+  }
   std::uint8_t u8(const char* what) { return *take(1, what); }
-  std::uint32_t u32(const char* what) { return cloud_detail::load<std::uint32_t>(chars(take(4, what))); }
-  double f64(const char* what) { return cloud_detail::load<double>(chars(take(8, what))); }
+  std::uint32_t u32(const char* what) { return num<std::uint32_t>(what); }
+  double f64(const char* what) { return num<double>(what); }
   std::string str(const char* what) {
     const std::uint32_t len = u32(what);
     const std::uint8_t* b = take(len, what);
-    return std::string(reinterpret_cast<const char*>(b), len);
+    std::size_t n = len;
+    if (cdr_ && n > 0 && b[n - 1] == 0) --n;  // CDR counts the terminating NUL
+    return std::string(reinterpret_cast<const char*>(b), n);
   }
   Eigen::Vector3d vec3(const char* what) {
     const double x = f64(what), y = f64(what), z = f64(what);
@@ -56,11 +80,22 @@ class Cursor {
     PLUMB_CHECK(std::isfinite(q.norm()) && q.norm() > 1e-9, type_ << ": " << what << " is not a rotation (norm " << q.norm() << ')');
     return q.normalized();
   }
-  void skip_f64(std::size_t k, const char* what) { take(8 * k, what); }
+  void skip_f64(std::size_t k, const char* what) {
+    align(8, what);
+    take(8 * k, what);
+  }
+  // std_msgs/Header (ROS 1: seq, uint32 sec, nsec, frame_id) or std_msgs/msg/Header (ROS 2: int32
+  // sec, uint32 nanosec, frame_id).
   RosHeader header() {
     RosHeader h;
-    h.seq = u32("header.seq");
-    h.stamp.sec = u32("header.stamp");
+    if (!cdr_) h.seq = u32("header.seq");
+    if (cdr_) {
+      const auto sec = num<std::int32_t>("header.stamp");
+      PLUMB_CHECK(sec >= 0, type_ << ": header.stamp " << sec << " s is before 1970");
+      h.stamp.sec = static_cast<std::uint32_t>(sec);
+    } else {
+      h.stamp.sec = u32("header.stamp");
+    }
     h.stamp.nsec = u32("header.stamp");
     h.frame_id = str("header.frame_id");
     return h;
@@ -71,6 +106,8 @@ class Cursor {
   const std::uint8_t* p_;
   std::size_t n_, i_ = 0;
   const char* type_;
+  bool cdr_, swap_ = false;
+  std::size_t origin_ = 0;
 };
 
 struct PointField {
@@ -117,11 +154,12 @@ const char* ros_known_md5sum(const std::string& type) {
   if (type == "sensor_msgs/Imu") return kRosImuMd5;
   if (type == "nav_msgs/Odometry") return kRosOdometryMd5;
   if (type == "tf2_msgs/TFMessage") return kRosTfMessageMd5;
+  if (type == "sensor_msgs/JointState") return kRosJointStateMd5;
   return nullptr;
 }
 
-RosPointCloud2 decode_point_cloud2(const std::uint8_t* data, std::size_t size) {
-  Cursor c(data, size, "PointCloud2");
+RosPointCloud2 decode_point_cloud2(const std::uint8_t* data, std::size_t size, RosSerialization serialization) {
+  Cursor c(data, size, "PointCloud2", serialization);
   RosPointCloud2 out;
   out.header = c.header();
   const std::uint32_t height = c.u32("height");
@@ -233,8 +271,8 @@ void synthesise_point_times(PointCloud& cloud, double period) {
   }
 }
 
-RosImu decode_imu(const std::uint8_t* data, std::size_t size) {
-  Cursor c(data, size, "Imu");
+RosImu decode_imu(const std::uint8_t* data, std::size_t size, RosSerialization serialization) {
+  Cursor c(data, size, "Imu", serialization);
   RosImu out;
   out.header = c.header();
   c.skip_f64(4 + 9, "orientation");
@@ -246,8 +284,8 @@ RosImu decode_imu(const std::uint8_t* data, std::size_t size) {
   return out;
 }
 
-RosOdometry decode_odometry(const std::uint8_t* data, std::size_t size) {
-  Cursor c(data, size, "Odometry");
+RosOdometry decode_odometry(const std::uint8_t* data, std::size_t size, RosSerialization serialization) {
+  Cursor c(data, size, "Odometry", serialization);
   RosOdometry out;
   out.header = c.header();
   out.child_frame_id = c.str("child_frame_id");
@@ -260,8 +298,21 @@ RosOdometry decode_odometry(const std::uint8_t* data, std::size_t size) {
   return out;
 }
 
-std::vector<RosTransform> decode_tf_message(const std::uint8_t* data, std::size_t size) {
-  Cursor c(data, size, "TFMessage");
+RosJointState decode_joint_state(const std::uint8_t* data, std::size_t size, RosSerialization serialization) {
+  Cursor c(data, size, "JointState", serialization);
+  RosJointState out;
+  out.header = c.header();
+  const std::uint32_t names = c.u32("name");
+  for (std::uint32_t i = 0; i < names; ++i) out.name.push_back(c.str("name"));
+  const std::uint32_t positions = c.u32("position");
+  PLUMB_CHECK(positions == 0 || positions == names,
+              "JointState: " << positions << " positions for " << names << " joint names");
+  for (std::uint32_t i = 0; i < positions; ++i) out.position.push_back(c.f64("position"));
+  return out;  // velocity and effort are not used
+}
+
+std::vector<RosTransform> decode_tf_message(const std::uint8_t* data, std::size_t size, RosSerialization serialization) {
+  Cursor c(data, size, "TFMessage", serialization);
   const std::uint32_t n = c.u32("transforms");
   std::vector<RosTransform> out;
   for (std::uint32_t i = 0; i < n; ++i) {

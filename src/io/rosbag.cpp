@@ -17,12 +17,11 @@
 #include <sstream>
 #include <utility>
 
-#include <bzlib.h>
-#include <lz4frame.h>
-
 #include "plumb/core/error.hpp"
 #include "plumb/io/input_file.hpp"
+#include "plumb/io/ros_messages.hpp"
 #include "detail_cloud_io.hpp"
+#include "detail_decompress.hpp"
 
 namespace plumb::io {
 namespace {
@@ -112,73 +111,21 @@ BufferRecord buffer_record(const std::vector<std::uint8_t>& buf, std::size_t pos
   return r;
 }
 
-struct Lz4Context {
-  LZ4F_dctx* ctx = nullptr;
-  Lz4Context() {
-    if (LZ4F_isError(LZ4F_createDecompressionContext(&ctx, LZ4F_VERSION))) ctx = nullptr;
-  }
-  ~Lz4Context() { LZ4F_freeDecompressionContext(ctx); }
-  Lz4Context(const Lz4Context&) = delete;
-  Lz4Context& operator=(const Lz4Context&) = delete;
-};
-
-// Grow `out` (a buffer being filled, `used` bytes so far) towards `limit` bytes; false when full.
-bool grow(std::vector<std::uint8_t>& out, std::size_t used, std::size_t limit) {
-  if (used < out.size()) return true;
-  if (out.size() >= limit) return false;
-  out.resize(std::min(limit, std::max<std::size_t>(out.size() * 2, 1 << 16)));
-  return true;
-}
-
-// Decompress a chunk's data into `out`, which must come to `size` bytes exactly. The output grows
-// with what the data really holds, so a corrupt `size` costs no memory.
+// Decompress a chunk's data into `out`, which must come to `size` bytes exactly.
 void decompress(const std::string& compression, const std::vector<std::uint8_t>& in, std::uint32_t size,
                 std::vector<std::uint8_t>& out, const Place& at) {
-  out.clear();
-  const std::size_t limit = static_cast<std::size_t>(size) + 1;  // one byte more shows an overlong chunk
-  std::size_t used = 0;
+  std::ostringstream where;
+  where << at;
   if (compression == "none") {
     PLUMB_CHECK(in.size() == size, at << ": uncompressed chunk of " << in.size() << " bytes, its header says " << size);
     out = in;
-    return;
   } else if (compression == "bz2") {
-    bz_stream s{};
-    PLUMB_CHECK(BZ2_bzDecompressInit(&s, 0, 0) == BZ_OK, at << ": cannot start bz2 decompression");
-    std::unique_ptr<bz_stream, int (*)(bz_stream*)> end(&s, BZ2_bzDecompressEnd);
-    s.next_in = const_cast<char*>(reinterpret_cast<const char*>(in.data()));
-    s.avail_in = static_cast<unsigned>(in.size());
-    int rc = BZ_OK;
-    while (rc != BZ_STREAM_END) {
-      PLUMB_CHECK(grow(out, used, limit), at << ": bz2 chunk decompresses to more than its size " << size);
-      s.next_out = reinterpret_cast<char*>(out.data() + used);
-      s.avail_out = static_cast<unsigned>(out.size() - used);
-      const unsigned before_in = s.avail_in;
-      rc = BZ2_bzDecompress(&s);
-      PLUMB_CHECK(rc == BZ_OK || rc == BZ_STREAM_END, at << ": corrupt bz2 chunk (bzlib error " << rc << ')');
-      const std::size_t produced = out.size() - used - s.avail_out;
-      used += produced;
-      PLUMB_CHECK(rc == BZ_STREAM_END || produced > 0 || s.avail_in < before_in,
-                  at << ": bz2 chunk data cut off");
-    }
+    detail::decompress_bz2(in.data(), in.size(), size, out, where.str());
   } else if (compression == "lz4") {
-    Lz4Context c;
-    PLUMB_CHECK(c.ctx != nullptr, at << ": cannot start lz4 decompression");
-    std::size_t pos = 0, hint = 1;
-    while (pos < in.size()) {
-      PLUMB_CHECK(grow(out, used, limit), at << ": lz4 chunk decompresses to more than its size " << size);
-      std::size_t dst = out.size() - used, src = in.size() - pos;
-      hint = LZ4F_decompress(c.ctx, out.data() + used, &dst, in.data() + pos, &src, nullptr);
-      PLUMB_CHECK(!LZ4F_isError(hint), at << ": corrupt lz4 chunk (" << LZ4F_getErrorName(hint) << ')');
-      PLUMB_CHECK(dst > 0 || src > 0, at << ": lz4 chunk makes no progress");
-      pos += src;
-      used += dst;
-    }
-    PLUMB_CHECK(hint == 0, at << ": lz4 chunk data cut off");
+    detail::decompress_lz4_frame(in.data(), in.size(), size, out, where.str());
   } else {
     PLUMB_THROW(at << ": unsupported chunk compression '" << compression << "' (none, bz2 and lz4 are read)");
   }
-  PLUMB_CHECK(used == size, at << ": chunk decompresses to " << used << " bytes, its header says " << size);
-  out.resize(used);
 }
 
 }  // namespace
@@ -421,6 +368,41 @@ void BagReader::read(const std::vector<std::uint32_t>& ids, const std::function<
     }
     if (progress) progress(r.next, file_size_);
   }
+}
+
+void BagReader::check_type(const std::string& topic, const std::string& ros1_type) const {
+  for (const BagConnection& c : connections_) {
+    if (c.topic != topic) continue;
+    PLUMB_CHECK(c.type == ros1_type, path_ << ": topic " << topic << " has type " << c.type << ", expected " << ros1_type);
+    const char* md5 = ros_known_md5sum(c.type);
+    PLUMB_CHECK(md5 != nullptr && c.md5sum == md5,
+                path_ << ": topic " << topic << ": md5sum " << c.md5sum << " of " << c.type << " (connection " << c.id
+                      << ", from its first message) differs from the known " << (md5 ? md5 : "?")
+                      << ": another version of the message, which plumb does not decode");
+  }
+}
+
+void BagReader::read_topics(const std::vector<std::string>& topics, const std::function<bool(const RecordedMessage&)>& f,
+                            const std::function<void(std::uint64_t, std::uint64_t)>& progress) const {
+  std::vector<std::uint32_t> ids;
+  for (const BagConnection& c : connections_) {
+    if (std::find(topics.begin(), topics.end(), c.topic) != topics.end()) ids.push_back(c.id);
+  }
+  if (ids.empty()) return;
+  read(
+      ids,
+      [&](const BagMessage& m) {
+        RecordedMessage r;
+        r.topic = &m.connection->topic;
+        r.time = m.time;
+        r.data = m.data;
+        r.size = m.size;
+        r.serialization = RosSerialization::kRos1;
+        r.chunk_offset = m.chunk_offset;
+        r.offset = m.offset;
+        return f(r);
+      },
+      progress);
 }
 
 }  // namespace plumb::io

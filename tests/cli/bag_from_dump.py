@@ -3,7 +3,9 @@
 """Write a ROS 1 bag from a frame dump with ROS's own rosbag (Debian python3-rosbag), for the tests
 of `plumb import`: the first FRAMES LiDAR frames as sensor_msgs/PointCloud2 on /points (frame
 "lidar"), imu.csv as sensor_msgs/Imu on /imu (frame "imu"), odom.csv as nav_msgs/Odometry on /odom
-and the extrinsics as tf2_msgs/TFMessage on /tf_static (base_link -> lidar, base_link -> imu).
+and the extrinsics as tf2_msgs/TFMessage on /tf_static (base_link -> lidar, base_link -> imu); with
+--wheels also wheels.csv as sensor_msgs/JointState on /joint_states (joints "caster", "wheel_left",
+"wheel_right": the wheel angles [rad], the caster at 0).
 
 Layouts of the clouds: "pcd" sends the PCD records as they are (fields x y z intensity ring time
 label, packed); "unusual" reorders the fields, pads point_step, stores x y z as float64 and splits
@@ -15,7 +17,7 @@ float32, t uint32 [ns], reflectivity uint16, ring uint16, ambient uint16, range 
 "notime" is x y z intensity ring without a time field.
 
 usage: bag_from_dump.py DUMP OUT.bag [--compression none|bz2|lz4] [--layout L] [--frames N]
-                        [--no-tf-static]
+                        [--no-tf-static] [--wheels]
 """
 import argparse
 import csv
@@ -28,7 +30,7 @@ import rosbag
 import genpy
 from geometry_msgs.msg import TransformStamped
 from nav_msgs.msg import Odometry
-from sensor_msgs.msg import Imu, PointCloud2, PointField
+from sensor_msgs.msg import Imu, JointState, PointCloud2, PointField
 from tf2_msgs.msg import TFMessage
 
 PCD_TO_ROS = {('I', 1): PointField.INT8, ('U', 1): PointField.UINT8, ('I', 2): PointField.INT16,
@@ -196,6 +198,7 @@ def main():
     ap.add_argument('--layout', default='pcd', choices=['pcd', 'unusual', 'unusual-be'] + sorted(DRIVER_LAYOUTS))
     ap.add_argument('--frames', type=int, default=1000000)
     ap.add_argument('--no-tf-static', action='store_true')
+    ap.add_argument('--wheels', action='store_true')
     a = ap.parse_args()
     meta = json.load(open(os.path.join(a.dump, 'meta.json')))
     messages = []  # (stamp, order, topic, message)
@@ -215,6 +218,13 @@ def main():
         m.pose.pose.position.x, m.pose.pose.position.y = x, y
         m.pose.pose.orientation.z, m.pose.pose.orientation.w = math.sin(theta / 2), math.cos(theta / 2)
         messages.append((stamp, 2, '/odom', m))
+    if a.wheels:
+        for stamp, left, right in rows(os.path.join(a.dump, 'wheels.csv')):
+            m = JointState()
+            m.header.stamp = ros_time(stamp)
+            m.name = ['caster', 'wheel_left', 'wheel_right']
+            m.position = [0.0, left, right]
+            messages.append((stamp, 4, '/joint_states', m))
     frames = [r for r in csv.reader(open(os.path.join(a.dump, 'frames.csv')))][1:1 + a.frames]
     first = float(frames[0][1])
     tf = TFMessage(transforms=[transform(first, 'base_link', 'lidar', meta['T_base_lidar']),

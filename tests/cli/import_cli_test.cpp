@@ -72,8 +72,9 @@ class ImportCliTest : public test::CliTest {
   /// A bag of the dump's first `frames` frames (and all its IMU and odometry), written by rosbag.
   static std::string bag(const std::string& compression, const std::string& layout, int frames,
                          const std::string& options = "") {
-    const std::string path = dir_ + "/" + compression + "_" + layout + "_" + std::to_string(frames) +
-                             (options.empty() ? "" : "_notf") + ".bag";
+    std::string tag = options;
+    for (char& c : tag) c = c == ' ' || c == '-' ? '_' : c;
+    const std::string path = dir_ + "/" + compression + "_" + layout + "_" + std::to_string(frames) + tag + ".bag";
     if (!fs::exists(path)) {
       const std::string command = std::string(kPython) + " '" + PLUMB_SOURCE_DIR + "/tests/cli/bag_from_dump.py' '" +
                                   dump() + "' '" + path + "' --compression " + compression + " --layout " + layout +
@@ -183,12 +184,13 @@ TEST_F(ImportCliTest, ListCountsWhatTheBagHolds) {
 TEST_F(ImportCliTest, TheKnownMd5sumsAreRosOwn) {
   const std::string out = dir_ + "/md5.txt";
   ASSERT_EQ(shell(std::string(kPython) +
-                  " -c 'from sensor_msgs.msg import PointCloud2, Imu; from nav_msgs.msg import Odometry; "
+                  " -c 'from sensor_msgs.msg import PointCloud2, Imu, JointState; from nav_msgs.msg import Odometry; "
                   "from tf2_msgs.msg import TFMessage; print(PointCloud2._md5sum, Imu._md5sum, Odometry._md5sum, "
-                  "TFMessage._md5sum)' > '" + out + "'"),
+                  "TFMessage._md5sum, JointState._md5sum)' > '" + out + "'"),
             0);
   EXPECT_EQ(test::read_text(out), std::string(io::kRosPointCloud2Md5) + " " + io::kRosImuMd5 + " " +
-                                      io::kRosOdometryMd5 + " " + io::kRosTfMessageMd5 + "\n");
+                                      io::kRosOdometryMd5 + " " + io::kRosTfMessageMd5 + " " +
+                                      io::kRosJointStateMd5 + "\n");
 }
 
 TEST_F(ImportCliTest, StartAndDurationCutTheRecording) {
@@ -343,6 +345,29 @@ TEST_F(ImportCliTest, NeverWritesOverTheUsersFiles) {
   r = run_cli("import '" + path + "' -o '" + file + "'");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_EQ(test::read_text(file), "mine");
+}
+
+TEST_F(ImportCliTest, WheelAnglesFromJointState) {
+  const io::FrameDumpReader want(dump());
+  const std::string path = bag("lz4", "pcd", 3, "--wheels");
+  const std::string out = dir_ + "/imported_wheels";
+  test::RunResult r = import(path, out, "--wheels /joint_states");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--wheels needs --wheel-joints LEFT RIGHT"), std::string::npos) << r.err;
+  r = import(path, out, "--wheels /joint_states --wheel-joints wheel_left wheel_middle");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("/joint_states message 0"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("no joint 'wheel_middle' (--wheel-joints)"), std::string::npos) << r.err;
+  r = import(path, out, "--wheels /joint_states --wheel-joints wheel_left wheel_right --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto got = io::FrameDumpReader(out).wheels(), expected = want.wheels();
+  EXPECT_EQ(Json::parse(r.out)["wheel_readings"], expected.size());
+  ASSERT_EQ(got.size(), expected.size());
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    EXPECT_NEAR(got[i].stamp, expected[i].stamp, 1e-9) << i;
+    EXPECT_EQ(got[i].left, expected[i].left) << i;
+    EXPECT_EQ(got[i].right, expected[i].right) << i;
+  }
 }
 
 // Two LIO runs.

@@ -6,7 +6,8 @@
 ///        (topic, type, md5sum, message definition), the topic list with counts and rates, and the
 ///        messages of chosen connections, streamed chunk by chunk so that a bag of any size needs
 ///        about one chunk of memory. Chunk compression: none, bz2 and lz4 (the LZ4 frame format
-///        that ROS's roslz4 writes). ROS 2 bags (MCAP, sqlite3) are not read.
+///        that ROS's roslz4 writes). ROS 2 bags in MCAP are read by io::McapReader (mcap.hpp);
+///        io::open_recording() (recording.hpp) opens either.
 ///
 /// Every record is bounds-checked: a truncated or corrupt bag gives plumb::Error
 /// `BAG: offset N: message`, N the byte offset in the file of the record (for a record inside a
@@ -20,18 +21,9 @@
 #include <string>
 #include <vector>
 
-namespace plumb::io {
+#include "plumb/io/recording.hpp"
 
-/// @brief A ROS time: seconds and nanoseconds since the epoch (or since any origin).
-struct RosTime {
-  std::uint32_t sec = 0;
-  std::uint32_t nsec = 0;
-  /// @brief The time in seconds: the nanoseconds divided by 10^9, correctly rounded (so a stamp
-  ///        written from a double of up to about 10^6 s reads back as that double).
-  double seconds() const { return static_cast<double>(nanoseconds()) / 1e9; }
-  /// @brief The time in nanoseconds.
-  std::int64_t nanoseconds() const { return static_cast<std::int64_t>(sec) * 1000000000 + nsec; }
-};
+namespace plumb::io {
 
 /// @brief A connection record: one publisher's topic and message type.
 struct BagConnection {
@@ -52,22 +44,11 @@ struct BagMessage {
   std::uint64_t offset = 0;        ///< offset of its record in the uncompressed chunk
 };
 
-/// @brief One topic of a bag (its connections together), as `rosbag info` lists it.
-struct BagTopic {
-  std::string topic;
-  std::string type;
-  std::string md5sum;
-  std::uint64_t messages = 0;
-  RosTime first, last;  ///< record times of the first and the last message
-  /// @brief Mean message rate (messages - 1) / (last - first) [Hz]; 0 with fewer than two messages.
-  double rate_hz = 0.0;
-};
-
 /// @brief A ROS 1 bag opened for reading. Opening reads the bag header, the connection records and
 ///        the chunk index at the end of the file (not the messages).
 /// @note A bag whose recording was interrupted has no index: it is refused with a message that
 ///       suggests `rosbag reindex`. Not thread safe.
-class BagReader {
+class BagReader final : public Recording {
  public:
   /// @throws plumb::Error naming the file and the offset when it is not a ROS bag 2.0, is truncated
   ///         or corrupt, or has no index.
@@ -76,19 +57,26 @@ class BagReader {
   /// @throws plumb::Error as the other constructor.
   BagReader(std::unique_ptr<std::istream> in, const std::string& name);
 
-  const std::string& path() const { return path_; }
-  std::uint64_t file_size() const { return file_size_; }
+  std::string format() const override { return "ROS 1 bag 2.0"; }
+  const std::string& path() const override { return path_; }
+  std::uint64_t file_size() const override { return file_size_; }
   const std::vector<BagConnection>& connections() const { return connections_; }
-  std::size_t num_chunks() const { return chunks_.size(); }
-  std::uint64_t num_messages() const;  ///< from the index
-  RosTime start_time() const;          ///< earliest record time (0 for an empty bag)
-  RosTime end_time() const;            ///< latest record time
+  std::size_t num_chunks() const override { return chunks_.size(); }
+  std::uint64_t num_messages() const override;  ///< from the index
+  RosTime start_time() const override;          ///< earliest record time (0 for an empty bag)
+  RosTime end_time() const override;            ///< latest record time
   /// @brief Chunks by compression, e.g. {"bz2", 12}; reads the chunk headers.
-  std::vector<std::pair<std::string, std::size_t>> compression() const;
+  std::vector<std::pair<std::string, std::size_t>> compression() const override;
 
   /// @brief The topics in name order with counts and rates, read from the index records that
   ///        follow every chunk (not the messages). @throws plumb::Error on a corrupt index.
-  std::vector<BagTopic> topics() const;
+  std::vector<BagTopic> topics() const override;
+
+  /// @brief Every connection of `topic` must carry `ros1_type` with the md5sum the decoders know.
+  void check_type(const std::string& topic, const std::string& ros1_type) const override;
+  /// @brief read() of the connections of `topics`, in bag (file) order.
+  void read_topics(const std::vector<std::string>& topics, const std::function<bool(const RecordedMessage&)>& f,
+                   const std::function<void(std::uint64_t, std::uint64_t)>& progress = {}) const override;
 
   /// @brief Call `f` for every message of the connections `ids`, in bag (file) order, reading only
   ///        the chunks that hold them, one at a time. Stops when `f` returns false.
