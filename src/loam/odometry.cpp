@@ -310,18 +310,11 @@ void loam_associate_map(const LoamMap& map, const LoamFeatures& cur, const Eigen
   // The queries are independent: chunks of them run on settings.threads threads, their factors
   // appended in query order (the same list for any thread count).
   constexpr std::size_t kGrain = 256;
-  // Mean and covariance of the k neighbours, or false when one is too far.
-  auto fit = [&](const KdTree3f& tree, const PointCloud& cloud, const Vector3f& q, std::size_t* idx, float* d,
-                 Vector3d& mean, Eigen::SelfAdjointEigenSolver<Matrix3d>& eig) {
-    const std::size_t found = tree.knn(q, kk, idx, d);
-    if (found < kk || d[found - 1] > max_sq) return false;
-    Matrix3d C;
-    loam_neighbour_moments(cloud, idx, found, mean, C);
-    eig.computeDirect(C);
-    return true;
-  };
-  auto add_edges = [&](const PointCloud& queries) {
-    if (!map.edge_tree()) return;
+  // For each finite query moved by T: the mean and eigen-decomposed covariance of its k nearest
+  // map features (none farther than the gate), handed to `accept`, which appends its factor or not.
+  auto associate = [&](const PointCloud& queries, const std::optional<KdTree3f>& tree, const PointCloud& features,
+                       auto accept) {
+    if (!tree) return;
     parallel_append(settings.threads, queries.size(), kGrain, factors,
                     [&](std::size_t begin, std::size_t end, std::vector<LoamCorrespondence>& out) {
       std::size_t idx[64];
@@ -331,41 +324,35 @@ void loam_associate_map(const LoamMap& map, const LoamFeatures& cur, const Eigen
       for (std::size_t i = begin; i < end; ++i) {
         const Vector3f& p = queries.points[i];
         if (!p.allFinite()) continue;
-        if (!fit(*map.edge_tree(), map.edges(), R * p + t, idx, d, mean, eig)) continue;
-        const Vector3d ev = eig.eigenvalues();  // ascending
-        if (!(ev(2) > 0.0) || ev(2) < settings.map_edge_ratio * ev(1)) continue;
-        out.push_back({Factor::Kind::kEdge, p.cast<double>(), mean, eig.eigenvectors().col(2).normalized()});
+        const std::size_t found = tree->knn(R * p + t, kk, idx, d);
+        if (found < kk || d[found - 1] > max_sq) continue;
+        Matrix3d C;
+        loam_neighbour_moments(features, idx, found, mean, C);
+        eig.computeDirect(C);
+        accept(p, idx, mean, eig, out);
       }
     });
   };
-  auto add_planes = [&](const PointCloud& queries) {
-    if (!map.plane_tree()) return;
-    parallel_append(settings.threads, queries.size(), kGrain, factors,
-                    [&](std::size_t begin, std::size_t end, std::vector<LoamCorrespondence>& out) {
-      std::size_t idx[64];
-      float d[64];
-      Vector3d mean;
-      Eigen::SelfAdjointEigenSolver<Matrix3d> eig;
-      for (std::size_t i = begin; i < end; ++i) {
-        const Vector3f& p = queries.points[i];
-        if (!p.allFinite()) continue;
-        if (!fit(*map.plane_tree(), map.planes(), R * p + t, idx, d, mean, eig)) continue;
-        const Vector3d ev = eig.eigenvalues();  // ascending
-        if (!(ev(1) > 0.0) || ev(1) < settings.map_plane_ratio * ev(0)) continue;
-        const Vector3d n = eig.eigenvectors().col(0).normalized();
-        bool flat = true;
-        for (std::size_t j = 0; j < kk && flat; ++j) {
-          flat = std::abs(n.dot(map.planes().points[idx[j]].cast<double>() - mean)) <= settings.map_plane_tolerance;
-        }
-        if (!flat) continue;
-        out.push_back({Factor::Kind::kPlane, p.cast<double>(), mean, n});
-      }
-    });
+  auto edge = [&](const Vector3f& p, const std::size_t*, const Vector3d& mean,
+                  const Eigen::SelfAdjointEigenSolver<Matrix3d>& eig, std::vector<LoamCorrespondence>& out) {
+    const Vector3d ev = eig.eigenvalues();  // ascending
+    if (!(ev(2) > 0.0) || ev(2) < settings.map_edge_ratio * ev(1)) return;
+    out.push_back({Factor::Kind::kEdge, p.cast<double>(), mean, eig.eigenvectors().col(2).normalized()});
   };
-  add_edges(cur.edges);
-  add_edges(cur.edge_candidates);
-  add_planes(cur.planes);
-  add_planes(cur.plane_candidates);
+  auto plane = [&](const Vector3f& p, const std::size_t* idx, const Vector3d& mean,
+                   const Eigen::SelfAdjointEigenSolver<Matrix3d>& eig, std::vector<LoamCorrespondence>& out) {
+    const Vector3d ev = eig.eigenvalues();  // ascending
+    if (!(ev(1) > 0.0) || ev(1) < settings.map_plane_ratio * ev(0)) return;
+    const Vector3d n = eig.eigenvectors().col(0).normalized();
+    for (std::size_t j = 0; j < kk; ++j) {
+      if (std::abs(n.dot(map.planes().points[idx[j]].cast<double>() - mean)) > settings.map_plane_tolerance) return;
+    }
+    out.push_back({Factor::Kind::kPlane, p.cast<double>(), mean, n});
+  };
+  associate(cur.edges, map.edge_tree(), map.edges(), edge);
+  associate(cur.edge_candidates, map.edge_tree(), map.edges(), edge);
+  associate(cur.planes, map.plane_tree(), map.planes(), plane);
+  associate(cur.plane_candidates, map.plane_tree(), map.planes(), plane);
 }
 
 LoamResult loam_scan_to_map(const LoamMap& map, const LoamFeatures& cur,
