@@ -9,6 +9,7 @@
 
 #include "plumb/app/run.hpp"
 #include "plumb/core/error.hpp"
+#include "plumb/core/parallel.hpp"
 #include "plumb/core/types.hpp"
 #include "plumb/eval/metrics.hpp"
 
@@ -63,6 +64,8 @@ void track_frames(const io::FrameDumpReader& dump, const LioInput& in, const Lio
   std::size_t first_frame = n;
   std::size_t next_imu = 0;
   report.frames.reserve(n);
+  // Reading frame i + 1 overlaps the estimator's work on frame i (with threads != 1).
+  Prefetch<PointCloud> frames(settings.lio.threads, n, [&dump](std::size_t i) { return dump.frame(i); });
   for (std::size_t i = 0; i < n; ++i) {
     const double stamp = dump.stamp(i);
     if (!lio) {
@@ -81,7 +84,7 @@ void track_frames(const io::FrameDumpReader& dump, const LioInput& in, const Lio
     }
     LioFrameResult r;
     try {
-      r = lio->process(dump.frame(i), stamp);
+      r = lio->process(frames.get(i), stamp);
     } catch (const std::exception& e) {
       // What was computed so far is kept: the caller writes it marked partial.
       if (first_frame == n) throw;

@@ -14,6 +14,7 @@
 #include "plumb/core/clock.hpp"
 #include "plumb/core/deskew.hpp"
 #include "plumb/core/error.hpp"
+#include "plumb/core/parallel.hpp"
 #include "plumb/core/sensor_data.hpp"
 #include "plumb/eval/metrics.hpp"
 
@@ -123,12 +124,16 @@ void track_frames(const io::FrameDumpReader& dump, const bim::BimMesh& mesh, con
   BimOdometry odometry(std::move(bim_cloud), report.T_world_base0, os);
   const Pose2 odom0 = odom.at(dump.stamp(0));
   const auto t_frames = std::chrono::steady_clock::now();
+  // Reading and deskewing frame i + 1 overlaps the odometry's work on frame i (with threads != 1).
+  Prefetch<PointCloud> frames(settings.odometry.threads, n, [&](std::size_t i) {
+    return (i == 0 && first_frame) ? std::move(*first_frame) : frame_at(i);
+  });
   for (std::size_t i = 0; i < n; ++i) {
     const double stamp = dump.stamp(i);
     const Pose2 o = odom.at(stamp);
     BimFrameResult r;
     try {
-      PointCloud frame = (i == 0 && first_frame) ? std::move(*first_frame) : frame_at(i);
+      PointCloud frame = frames.get(i);
       r = odometry.process(frame, stamp, o);
     } catch (const std::exception& e) {
       // What was computed so far is kept: the caller writes it marked partial.

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The parallel layer: every chunk runs exactly once on any thread count, outputs come back in item
 // order (the same as one sequential pass), a floating-point sum over chunk partials is the same bit
-// for bit on 1..16 threads, and errors are reported as the lowest failing chunk's whatever the count.
+// for bit on 1..16 threads, and errors are reported as the lowest failing chunk's whatever the count;
+// a prefetch stage gives the items of the serial loop, made one ahead, and its errors where that loop meets them.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -114,6 +115,60 @@ TEST(ParallelTest, RethrowsTheLowestFailingChunk) {
     }
     EXPECT_GE(ran.load(), 14) << "threads " << threads;  // every chunk up to the failing one
   }
+}
+
+TEST(ParallelTest, PrefetchGivesTheSerialItemsAndMakesTheNextOneAhead) {
+  for (int threads : {1, 2, 0}) {
+    std::vector<std::atomic<int>> made(20);
+    std::atomic<int> inside{0}, overlapped{0};
+    {
+      Prefetch<std::vector<int>> items(threads, made.size(), [&](std::size_t i) {
+        made[i].fetch_add(1);
+        // Item i + 1 is made while the consumer holds item i: wait a little for it to be inside.
+        for (int k = 0; k < 200 && inside.load() == 0; ++k) std::this_thread::sleep_for(std::chrono::microseconds(50));
+        overlapped.fetch_add(inside.load());
+        return std::vector<int>(i + 1, static_cast<int>(i));
+      });
+      for (std::size_t i = 0; i < made.size(); ++i) {
+        const std::vector<int> item = items.get(i);
+        inside.store(1);
+        ASSERT_EQ(item, std::vector<int>(i + 1, static_cast<int>(i))) << "threads " << threads;
+        std::this_thread::sleep_for(std::chrono::microseconds(200));
+        inside.store(0);
+      }
+    }
+    for (std::size_t i = 0; i < made.size(); ++i) EXPECT_EQ(made[i].load(), 1) << "item " << i << ", threads " << threads;
+    if (threads == 1) {
+      EXPECT_EQ(overlapped.load(), 0);  // made on the calling thread, never while an item is held
+    } else {
+      EXPECT_GT(overlapped.load(), 0) << "threads " << threads;
+    }
+  }
+}
+
+TEST(ParallelTest, PrefetchRethrowsAnItemsErrorWhereTheSerialLoopMeetsIt) {
+  for (int threads : {1, 2}) {
+    std::size_t got = 0;
+    try {
+      Prefetch<int> items(threads, 10, [](std::size_t i) -> int {
+        if (i == 4) throw std::runtime_error("item 4");
+        return static_cast<int>(i);
+      });
+      for (std::size_t i = 0; i < 10; ++i) {
+        EXPECT_EQ(items.get(i), static_cast<int>(i));
+        ++got;
+      }
+      ADD_FAILURE() << "no exception, threads " << threads;
+    } catch (const std::runtime_error& e) {
+      EXPECT_STREQ(e.what(), "item 4");
+    }
+    EXPECT_EQ(got, 4u) << "threads " << threads;  // items 0-3 came before the error
+  }
+  // Stopping early and asking out of order: the item made ahead is dropped, the one asked for made.
+  Prefetch<int> items(2, 10, [](std::size_t i) { return static_cast<int>(i) * 3; });
+  EXPECT_EQ(items.get(0), 0);
+  EXPECT_EQ(items.get(5), 15);
+  EXPECT_EQ(items.get(6), 18);
 }
 
 }  // namespace

@@ -16,6 +16,9 @@
 
 #include <cstddef>
 #include <functional>
+#include <future>
+#include <optional>
+#include <system_error>
 #include <utility>
 #include <vector>
 
@@ -75,5 +78,57 @@ void parallel_for(int threads, std::size_t n, std::size_t grain, F&& f) {
     f(begin, begin + grain < n ? begin + grain : n);
   });
 }
+
+/// @brief A pipeline stage: items 0, 1, 2, ... made by `make(i)` one ahead of their consumer, on a
+///        second thread, while the consumer works on the item before (reading and deskewing the
+///        next frame while the estimator processes this one).
+///
+/// `make` must depend on i alone, never on what the consumer did with earlier items: the items,
+/// and so everything computed from them, are then the same for any thread count. With threads == 1
+/// (or when the system refuses a thread) each item is made on the calling thread when asked for.
+/// An exception of make(i) is rethrown by get(i), where the serial loop would have met it. At most
+/// two items exist at once; the destructor waits for a pending one.
+template <class T>
+class Prefetch {
+ public:
+  /// @param threads the caller's thread setting (1 = no second thread; 0 = every core, as >= 2)
+  /// @param n number of items; get() is called with i = 0, 1, ... (it may stop early)
+  Prefetch(int threads, std::size_t n, std::function<T(std::size_t)> make)
+      : ahead_(threads != 1), n_(n), make_(std::move(make)) {}
+  Prefetch(const Prefetch&) = delete;
+  Prefetch& operator=(const Prefetch&) = delete;
+  ~Prefetch() {
+    if (pending_.valid()) pending_.wait();
+  }
+
+  /// @brief Item i (i = the previous call's i + 1, starting at 0); starts making item i + 1.
+  T get(std::size_t i) {
+    std::optional<T> item;
+    if (pending_.valid() && pending_index_ == i) {
+      std::future<T> f = std::move(pending_);
+      item.emplace(f.get());
+    } else {
+      if (pending_.valid()) pending_.wait();  // out of order: drop the item made ahead
+      pending_ = {};
+      item.emplace(make_(i));
+    }
+    if (ahead_ && i + 1 < n_) {
+      try {
+        pending_ = std::async(std::launch::async, make_, i + 1);
+        pending_index_ = i + 1;
+      } catch (const std::system_error&) {
+        ahead_ = false;  // no thread to be had: the next items are made when asked for
+      }
+    }
+    return std::move(*item);
+  }
+
+ private:
+  bool ahead_;
+  std::size_t n_;
+  std::function<T(std::size_t)> make_;
+  std::future<T> pending_;
+  std::size_t pending_index_ = 0;
+};
 
 }  // namespace plumb
