@@ -16,6 +16,8 @@
 #include <string>
 #include <vector>
 
+#include <sys/resource.h>
+
 #include <CLI/CLI.hpp>
 
 #include "plumb/core/error.hpp"
@@ -63,6 +65,14 @@ void naming_inputs(const std::vector<std::string>& inputs, F&& f) {
   } catch (const std::bad_alloc&) {
     throw plumb::Error(named("out of memory (std::bad_alloc): the input asks for more than this machine has"));
   }
+}
+
+/// Peak resident set size of this process so far [MiB] (getrusage; Linux counts in KiB), for the
+/// reports of the long-running commands: what a robot's computer must have free for the job.
+inline double peak_rss_mib() {
+  rusage usage{};
+  if (getrusage(RUSAGE_SELF, &usage) != 0) return 0.0;
+  return static_cast<double>(usage.ru_maxrss) / 1024.0;
 }
 
 /// A finite number in [lo, hi] (or (lo, hi] when `lo_open`); either bound may be infinite. CLI11

@@ -77,6 +77,7 @@ nlohmann::json lio_report_json(const LioRunReport& r, const LioOptions& o, const
                  {"mean_ms", r.mean_seconds_process * 1e3},
                  {"median_ms", r.median_seconds_process * 1e3},
                  {"max_ms", r.max_seconds_process * 1e3}};
+  j["peak_rss_mib"] = peak_rss_mib();
   j["features"] = {{"mean_plane_points", r.mean_plane_points}, {"mean_structure_planes", r.mean_structure_planes}};
   if (r.has_metrics) {
     j["path_length"] = r.path_length;

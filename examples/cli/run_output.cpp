@@ -10,6 +10,7 @@
 #include <fstream>
 #include <system_error>
 
+#include "cli_support.hpp"
 #include "plumb/app/deviation_files.hpp"
 #include "plumb/bim/sample.hpp"
 #include "plumb/core/error.hpp"
@@ -220,6 +221,7 @@ nlohmann::json run_report_json(const RunReport& r) {
                                  {"segment", r.mean_seconds_segment},
                                  {"icp", r.mean_seconds_icp},
                                  {"process", r.mean_seconds_process}};
+  j["peak_rss_mib"] = peak_rss_mib();
   if (r.has_ground_truth) {
     j["initial_error"] = {{"xy", r.initial_error_xy}, {"yaw_deg", r.initial_error_yaw_deg}};
     j["path_length"] = r.path_length;
