@@ -108,21 +108,21 @@ TEST_F(LioCliTest, HybridWritesTrajectoryAndReport) {
 
 TEST_F(LioCliTest, ThreadCountDoesNotChangeTheTrajectory) {
   // LOAM association (the default hybrid) and the ICP residuals (a plane threshold no frame
-  // reaches), each on 1, 2 and 3 threads: the same trajectory file byte for byte.
+  // reaches), each on 1 and 3 threads (chunks spread unevenly over the threads), over the first 30
+  // frames (each frame's queries span several chunks): the same trajectory file byte for byte.
   for (const std::string extra : {"", " --min-plane-points 100000 --icp-metric point-to-distribution"}) {
     SCOPED_TRACE(extra);
     std::vector<std::string> trajectories;
-    for (const char* threads : {"1", "2", "3"}) {
+    for (const char* threads : {"1", "3"}) {
       const std::string out = test::temp_path("lio_cli_threads_" + std::string(threads) + "_" + std::to_string(::getpid()));
       fs::remove_all(out);
-      const test::RunResult r = run_cli("lio '" + dir_ + "' --mode hybrid --threads " + threads + extra + " -o '" + out + "'");
+      const test::RunResult r = run_cli("lio '" + dir_ + "' --mode hybrid --max-frames 30 --threads " + threads + extra + " -o '" + out + "'");
       ASSERT_EQ(r.exit_code, 0) << r.err;
       trajectories.push_back(test::read_text(out + "/trajectory.tum"));
       fs::remove_all(out);
     }
     EXPECT_GT(trajectories[0].size(), 500u);
     EXPECT_EQ(trajectories[1], trajectories[0]);
-    EXPECT_EQ(trajectories[2], trajectories[0]);
   }
 }
 

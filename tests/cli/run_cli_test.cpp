@@ -116,13 +116,13 @@ TEST_F(CliTest, RunOnTheExactModelRegistersWithinACentimetre) {
 }
 
 TEST_F(CliTest, RunThreadCountDoesNotChangeAnyOutput) {
-  // The same run on 1 and 3 threads (and every core): trajectories and the as-built deviations
-  // byte for byte.
+  // The same run on 1 and 3 threads (chunks spread unevenly over the threads; the frame read
+  // ahead on a second thread): trajectories and the as-built deviations byte for byte.
   const std::string dir = test::temp_path("cli_run_threads_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   ASSERT_EQ(run_cli("simulate '" + demo_model() + "' -o '" + dir + "' --lidar vlp16 --length 3 --seed 6").exit_code, 0);
   std::vector<std::string> outputs;
-  for (const char* threads : {"1", "3", "0"}) {
+  for (const char* threads : {"1", "3"}) {
     const std::string out = dir + "_out" + threads;
     const test::RunResult r = run_cli("run '" + dir + "' --bim '" + demo_model() + "' -o '" + out +
                                       "' --gt-start --as-built --threads " + threads);
@@ -133,7 +133,6 @@ TEST_F(CliTest, RunThreadCountDoesNotChangeAnyOutput) {
   }
   EXPECT_GT(outputs[0].size(), 1000u);
   EXPECT_EQ(outputs[1], outputs[0]);
-  EXPECT_EQ(outputs[2], outputs[0]);
   EXPECT_NE(run_cli("run '" + dir + "' --bim '" + demo_model() + "' -o '" + dir + "_bad' --threads -2").exit_code, 0);
   std::filesystem::remove_all(dir);
 }
