@@ -16,6 +16,8 @@ bash scripts/setup.sh --fuzz
 # ccache (installed by setup.sh) makes rebuilds of unchanged sources free; harmless when cold.
 launcher=()
 if command -v ccache >/dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache); fi
+# Paths under the clone hashed relative to it, so that a fresh clone elsewhere reuses the cache.
+export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$(pwd)}" CCACHE_NOHASHDIR="${CCACHE_NOHASHDIR:-1}"
 
 data_dir="${PLUMB_DATA_DIR:-$root/../shared/data}"
 if [ ! -f "$data_dir/SOURCES.md" ]; then
