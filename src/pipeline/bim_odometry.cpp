@@ -3,6 +3,9 @@
 
 #include <chrono>
 #include <cmath>
+#include <future>
+#include <system_error>
+#include <utility>
 
 #include <Eigen/Eigenvalues>
 
@@ -86,6 +89,23 @@ BimFrameResult BimOdometry::process(const PointCloud& lidar_frame, double stamp,
   const CloudToScanResult scan = cloud_to_scan(lidar_frame, cs);
   out.scan_status = scan.status;
 
+  // The key points depend on the frame alone: with threads, they are found on a second thread while
+  // the front end matches the scan (the same points either way).
+  const bool correcting = settings_.use_bim && frame_index_ % settings_.correct_every == 0;
+  auto find_keys = [this, &lidar_frame] {
+    const auto t = std::chrono::steady_clock::now();
+    PointCloud keys = key_points(lidar_frame);
+    return std::make_pair(std::move(keys), seconds_since(t));
+  };
+  std::future<std::pair<PointCloud, double>> keys_ahead;
+  if (correcting && settings_.threads != 1) {
+    try {
+      keys_ahead = std::async(std::launch::async, find_keys);
+    } catch (const std::system_error&) {
+      // no thread to be had: found below, after the front end
+    }
+  }
+
   // Front end: PLICP against the local map, wheel-odometry prior, fallback to the prior.
   const ScanOdometryStep step = front_end_.add(scan.scan, odom_pose);
   out.mode = step.mode;
@@ -103,15 +123,19 @@ BimFrameResult BimOdometry::process(const PointCloud& lidar_frame, double stamp,
   if (frame_index_ == 0) first_front_pose_ = step.T_world_base;
   out.T_world_base_uncorrected = T_world_base0_ * first_front_pose_.ominus().oplus(step.T_world_base).to_isometry();
 
-  if (settings_.use_bim && frame_index_ % settings_.correct_every == 0) correct(lidar_frame, out);
+  if (correcting) {
+    auto [keys, seconds] = keys_ahead.valid() ? keys_ahead.get() : find_keys();
+    out.num_key_points = keys.size();
+    out.seconds_segment = seconds;
+    correct(keys, out);
+  }
   out.T_world_base = composer_.pose();
   ++frame_index_;
   out.seconds_total = seconds_since(t0);
   return out;
 }
 
-void BimOdometry::correct(const PointCloud& lidar_frame, BimFrameResult& out) {
-  const auto t0 = std::chrono::steady_clock::now();
+PointCloud BimOdometry::key_points(const PointCloud& lidar_frame) const {
   // Liu et al. 2022, sec. 2.2: ground and vertical-plane key points of the frame.
   const SegmentResult seg = segment_frame(lidar_frame, settings_.segment);
   PointCloud keys;
@@ -123,8 +147,10 @@ void BimOdometry::correct(const PointCloud& lidar_frame, BimFrameResult& out) {
     vs.leaf_size = settings_.key_point_voxel;
     keys = voxel_grid(keys, vs).cloud;
   }
-  out.num_key_points = keys.size();
-  out.seconds_segment = seconds_since(t0);
+  return keys;
+}
+
+void BimOdometry::correct(const PointCloud& keys, BimFrameResult& out) {
   if (keys.size() < settings_.min_anchor_inliers) return;
 
   // Liu et al. 2022, sec. 3.3, loop step (5): key points at the composed pose, registered to the BIM cloud.

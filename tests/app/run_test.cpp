@@ -67,6 +67,45 @@ TEST_F(BimOdometryRunTest, TracksGroundTruthFromAKnownStart) {
   EXPECT_LT(xy_error(r.lidar.poses[0], gt.poses[0]), 1e-9);
 }
 
+TEST_F(BimOdometryRunTest, ThreadsChangeNoFrameResult) {
+  // With threads, the next frame is read and deskewed ahead, each frame's key points are found
+  // beside its front end and the registration's search is split: every frame's result (the as-built
+  // estimate's included) is that of one thread, bit for bit.
+  const plumb::io::FrameDumpReader dump(dir_);
+  auto run = [&](int threads) {
+    plumb::RunSettings settings;
+    settings.initial_pose = dump.ground_truth().poses.front();
+    settings.max_frames = 40;
+    settings.odometry.estimate_as_built = true;
+    settings.odometry.threads = threads;
+    return plumb::run_bim_odometry(dump, *mesh_, settings);
+  };
+  const plumb::RunReport one = run(1);
+  ASSERT_EQ(one.frames.size(), 40u);
+  EXPECT_GT(one.anchors_accepted, 20u);
+  for (int threads : {3}) {
+    const plumb::RunReport many = run(threads);
+    ASSERT_EQ(many.frames.size(), one.frames.size()) << threads;
+    for (std::size_t i = 0; i < one.frames.size(); ++i) {
+      const plumb::BimFrameResult& a = one.frames[i];
+      const plumb::BimFrameResult& b = many.frames[i];
+      ASSERT_TRUE(a.T_world_base.matrix() == b.T_world_base.matrix()) << "frame " << i << ", threads " << threads;
+      ASSERT_TRUE(a.T_world_base_uncorrected.matrix() == b.T_world_base_uncorrected.matrix()) << i;
+      ASSERT_TRUE(a.T_world_base_registered.matrix() == b.T_world_base_registered.matrix()) << i;
+      ASSERT_EQ(a.num_key_points, b.num_key_points) << i;
+      ASSERT_EQ(a.icp_inliers, b.icp_inliers) << i;
+      ASSERT_EQ(a.icp_overlap, b.icp_overlap) << i;
+      ASSERT_EQ(a.anchor.decision, b.anchor.decision) << i;
+      ASSERT_EQ(a.as_built_pairs, b.as_built_pairs) << i;
+    }
+    ASSERT_EQ(many.deviations.size(), one.deviations.size());
+    for (std::size_t k = 0; k < one.deviations.size(); ++k) {
+      EXPECT_EQ(many.deviations[k].offset_m, one.deviations[k].offset_m) << one.deviations[k].global_id;
+      EXPECT_EQ(many.deviations[k].sigma_m, one.deviations[k].sigma_m) << one.deviations[k].global_id;
+    }
+  }
+}
+
 TEST_F(BimOdometryRunTest, BimCorrectionRemovesAnOffsetTheFrontEndKeeps) {
   // Start 25 cm and 2 degrees off: the front end carries the offset along, the BIM anchors remove it.
   const plumb::io::FrameDumpReader dump(dir_);

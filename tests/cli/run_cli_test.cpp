@@ -66,11 +66,13 @@ TEST_F(CliTest, RunWritesTheThreeTrajectoriesAndTableTwo) {
   EXPECT_LT(end.at("bim").at("error").get<double>(), 0.05);
   EXPECT_LT(j.at("max_error_xy").at("bim").get<double>(), 0.08);
   // The BIM registrations alone, against the truth: most frames register, within the as-built deviations.
-  // Per-frame time of BimOdometry and its parts (the parts add up to no more than the whole).
+  // Per-frame time of BimOdometry and its parts: the front end and the registration run one after
+  // the other, the key points (on every core, the CLI's default) beside the front end.
   const Json& t = j.at("mean_seconds_per_frame");
   EXPECT_GT(t.at("process").get<double>(), 0.0);
-  EXPECT_LE(t.at("front_end").get<double>() + t.at("segment").get<double>() + t.at("icp").get<double>(),
-            t.at("process").get<double>() * 1.001);
+  EXPECT_GT(t.at("segment").get<double>(), 0.0);
+  EXPECT_LE(t.at("front_end").get<double>() + t.at("icp").get<double>(), t.at("process").get<double>() * 1.001);
+  EXPECT_LE(t.at("segment").get<double>() + t.at("icp").get<double>(), t.at("process").get<double>() * 1.001);
   const Json& reg = j.at("registration_error_xy");
   EXPECT_GT(reg.at("count").get<std::size_t>(), dump.num_frames() / 2);
   EXPECT_GT(reg.at("rms").get<double>(), 0.0);

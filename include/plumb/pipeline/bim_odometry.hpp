@@ -100,8 +100,9 @@ struct BimOdometrySettings {
   bool estimate_as_built = false;
   AsBuiltSettings as_built;               ///< the estimator's settings (construction tolerance, ...)
   std::size_t as_built_refresh_every = 10;  ///< accepted anchors between updates of the registration target
-  /// Threads of the BIM registration's correspondence search (0 = every core; replaces
-  /// `icp.threads`). Results are bit-identical for any count (core/parallel.hpp).
+  /// Threads (0 = every core): the BIM registration's correspondence search (replaces
+  /// `icp.threads`), and with more than one, a frame's key points are found on a second thread while
+  /// the front end matches its scan. Results are bit-identical for any count (core/parallel.hpp).
   int threads = 1;
 };
 
@@ -135,6 +136,9 @@ struct BimFrameResult {
   Eigen::Isometry3d T_world_base_registered = Eigen::Isometry3d::Identity();
   AnchorResult anchor;                  ///< the composer's decision (kIgnored when no anchor was made)
   std::size_t as_built_pairs = 0;       ///< key-point pairs the as-built estimate took (estimate_as_built)
+  /// Time of the front end, of finding the key points and of their registration, and of the whole
+  /// frame [s]. With threads != 1 the key points are found while the front end runs, so the parts
+  /// may add up to more than the whole.
   double seconds_front_end = 0.0, seconds_segment = 0.0, seconds_icp = 0.0, seconds_total = 0.0;
 };
 
@@ -158,8 +162,10 @@ class BimOdometry {
   const AsBuiltMap* as_built() const { return as_built_.get(); }
 
  private:
+  /// The frame's ground and vertical-plane key points, thinned (a function of the frame alone).
+  PointCloud key_points(const PointCloud& lidar_frame) const;
   /// Registers the key points; fills the anchor fields of `out`.
-  void correct(const PointCloud& lidar_frame, BimFrameResult& out);
+  void correct(const PointCloud& keys, BimFrameResult& out);
   /// The accepted anchor's pairs into the as-built estimate; every as_built_refresh_every anchors,
   /// the registration target becomes the cloud as estimated.
   void update_as_built(const IcpResult& icp, const Vector3d& robot_position, BimFrameResult& out);
