@@ -12,7 +12,7 @@ set -euo pipefail
 
 packages=(cmake g++ make libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev liblzf-dev zlib1g-dev
           libcli11-dev nlohmann-json3-dev ccache python3
-          python3-dev pybind11-dev python3-numpy python3-pytest python3-matplotlib libxml2-utils
+          python3-dev pybind11-dev python3-numpy python3-pytest python3-matplotlib libxml2-utils time
           libbz2-dev liblz4-dev libzstd-dev
           python3-rosbag python3-sensor-msgs python3-nav-msgs python3-tf2-msgs python3-geometry-msgs nodejs)
 # npm from apt only when no npm is there (Node installed otherwise brings its own).

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <optional>
 #include <string>
 #include <vector>
@@ -20,8 +21,56 @@ namespace {
 struct LioInput {
   HybridLioSettings lio;  // the settings with the dump's sensor geometry
   FrameGroundTruth gt;
-  std::vector<ImuSample> imu;  // empty in LioMode::kLoam
-  double sweep = 0.1;          // one LiDAR period [s]
+  bool imu = false;    // an IMU mode: imu.csv is read (checked whole in prepare())
+  double sweep = 0.1;  // one LiDAR period [s]
+};
+
+// imu.csv fed to the estimator as the frames advance, holding only the samples a restart can
+// still ask for: the run's memory does not grow with the length of the IMU log. What it hands
+// out is what indexing the whole log would give.
+class ImuFeed {
+ public:
+  explicit ImuFeed(std::optional<io::ImuCsvReader> reader) : reader_(std::move(reader)) {}
+
+  // Every sample not handed out yet with a stamp <= t, in order.
+  template <class F>
+  void give_until(double t, F&& f) {
+    for (;;) {
+      if (next_ == kept_.size() && !read()) return;
+      if (kept_[next_].stamp > t) return;
+      f(kept_[next_++]);
+    }
+  }
+  // Hand out from the first sample with a stamp >= t on (a restart; before or after the next one).
+  void restart_at(double t) {
+    next_ = static_cast<std::size_t>(
+        std::lower_bound(kept_.begin(), kept_.end(), t, [](const ImuSample& a, double s) { return a.stamp < s; }) -
+        kept_.begin());
+    while (next_ == kept_.size() && read()) {
+      if (kept_.back().stamp < t) {
+        kept_.pop_back();
+        next_ = kept_.size();
+      }
+    }
+  }
+  // Samples handed out with a stamp < t are dropped: no later restart_at() asks for them.
+  void forget_before(double t) {
+    while (next_ > 0 && kept_.front().stamp < t) {
+      kept_.pop_front();
+      --next_;
+    }
+  }
+
+ private:
+  bool read() {
+    ImuSample m;
+    if (!reader_ || !reader_->next(m)) return false;
+    kept_.push_back(m);
+    return true;
+  }
+  std::optional<io::ImuCsvReader> reader_;  // none in LioMode::kLoam
+  std::deque<ImuSample> kept_;
+  std::size_t next_ = 0;  // index in kept_ of the next sample to hand out
 };
 
 LioInput prepare(const io::FrameDumpReader& dump, const LioRunSettings& settings, LioRunReport& report) {
@@ -48,7 +97,14 @@ LioInput prepare(const io::FrameDumpReader& dump, const LioRunSettings& settings
                               std::to_string(n) +
                               " frames; no accuracy report (RPE, APE, end error) and the start pose is the identity");
   }
-  if (imu_mode) in.imu = dump.imu();
+  if (imu_mode) {
+    // The whole file is checked before the first frame, so that a bad row stops the run before it
+    // starts; the run itself then streams it.
+    in.imu = true;
+    io::ImuCsvReader check = dump.imu_reader();
+    for (ImuSample m; check.next(m);) {
+    }
+  }
   const double rate = dump.meta().lidar.rate_hz;
   in.sweep = rate > 0.0 ? 1.0 / rate : 0.1;
   return in;
@@ -62,26 +118,22 @@ void track_frames(const io::FrameDumpReader& dump, const LioInput& in, const Lio
   // start pose is that of the frame that starts it.
   std::optional<HybridLio> lio;
   std::size_t first_frame = n;
-  std::size_t next_imu = 0;
+  ImuFeed imu(in.imu ? std::optional<io::ImuCsvReader>(dump.imu_reader()) : std::nullopt);
   report.frames.reserve(n);
   // Reading frame i + 1 overlaps the estimator's work on frame i (with threads != 1).
   Prefetch<PointCloud> frames(settings.lio.threads, n, [&dump](std::size_t i) { return dump.frame(i); });
   for (std::size_t i = 0; i < n; ++i) {
     const double stamp = dump.stamp(i);
+    // A restart at this frame or a later one looks back one sweep from its stamp at most.
+    imu.forget_before(stamp - in.sweep);
     if (!lio) {
       lio.emplace(in.gt.used ? in.gt.poses.poses[i] : Eigen::Isometry3d::Identity(), in.lio);
       // A new estimator after a skipped first frame gets the IMU from one sweep before this frame on
       // (the first one gets all of it).
-      if (i > 0) {
-        next_imu = static_cast<std::size_t>(std::lower_bound(in.imu.begin(), in.imu.end(), stamp - in.sweep,
-                                                             [](const ImuSample& a, double t) { return a.stamp < t; }) -
-                                            in.imu.begin());
-      }
+      if (i > 0) imu.restart_at(stamp - in.sweep);
     }
     // The IMU up to the end of this frame's sweep (what a live system has when the sweep is complete).
-    for (; next_imu < in.imu.size() && in.imu[next_imu].stamp <= stamp + in.sweep + 0.02; ++next_imu) {
-      lio->add_imu(in.imu[next_imu]);
-    }
+    imu.give_until(stamp + in.sweep + 0.02, [&lio](const ImuSample& m) { lio->add_imu(m); });
     LioFrameResult r;
     try {
       r = lio->process(frames.get(i), stamp);

@@ -93,32 +93,60 @@ std::string read_text(const std::string& path) {
   return text;
 }
 
+/// A CSV file with a fixed header, taken one line at a time: a data row's fields are checked
+/// against the header's count and handed out with their line number.
+class CsvLines {
+ public:
+  CsvLines(std::string path, const char* header)
+      : path_(std::move(path)), header_(header), expected_(detail::split_fields(header)) {}
+
+  /// Takes the next raw line (without its '\n'); true when it is a data row, whose fields are then
+  /// in fields() (views into `raw`).
+  bool take(std::string_view raw) {
+    ++line_number_;
+    const std::string_view line = trim(raw);
+    if (line.empty() || line.front() == '#') return false;
+    fields_ = detail::split_fields(line);
+    if (!have_header_) {
+      PLUMB_CHECK(fields_ == expected_, path_ << ':' << line_number_ << ": expected the header line '" << header_
+                                              << "', got '" << line << "'");
+      have_header_ = true;
+      return false;
+    }
+    PLUMB_CHECK(fields_.size() == expected_.size(), path_ << ':' << line_number_ << ": expected "
+                                                          << expected_.size() << " comma-separated fields, got "
+                                                          << fields_.size());
+    return true;
+  }
+  /// Called at the end of the file: a file without its header line is an error.
+  void finish() const {
+    PLUMB_CHECK(have_header_, path_ << ": empty file (expected the header line '" << header_ << "')");
+  }
+  const std::vector<std::string_view>& fields() const { return fields_; }
+  std::size_t line_number() const { return line_number_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  const char* header_;
+  std::vector<std::string_view> expected_;
+  std::vector<std::string_view> fields_;
+  std::size_t line_number_ = 0;
+  bool have_header_ = false;
+};
+
 /// Reads CSV text with a fixed header; calls `row(fields, line_number)` for every data row.
 template <class Row>
 void read_csv(const std::string& text, const std::string& path, const char* header, Row&& row) {
-  std::size_t line_number = 0;
-  bool have_header = false;
-  const std::vector<std::string_view> expected = detail::split_fields(header);
+  CsvLines csv(path, header);
   std::size_t pos = 0;
   while (pos < text.size()) {
     std::size_t end = text.find('\n', pos);
     if (end == std::string::npos) end = text.size();
-    const std::string_view line = trim(std::string_view(text).substr(pos, end - pos));
+    if (csv.take(std::string_view(text).substr(pos, end - pos))) row(csv.fields(), csv.line_number());
     pos = end + 1;
-    ++line_number;
-    if (line.empty() || line.front() == '#') continue;
-    std::vector<std::string_view> fields = detail::split_fields(line);
-    if (!have_header) {
-      PLUMB_CHECK(fields == expected, path << ':' << line_number << ": expected the header line '" << header
-                                           << "', got '" << line << "'");
-      have_header = true;
-      continue;
-    }
-    PLUMB_CHECK(fields.size() == expected.size(), path << ':' << line_number << ": expected " << expected.size()
-                                                       << " comma-separated fields, got " << fields.size());
-    row(fields, line_number);
   }
-  PLUMB_CHECK(have_header, path << ": empty file (expected the header line '" << header << "')");
+  csv.finish();
 }
 
 double parse_double(std::string_view field, const std::string& path, std::size_t line_number, const char* what) {
@@ -179,6 +207,7 @@ constexpr const char* kFramesHeader = "index,stamp,file";
 constexpr double kMinLidarRateHz = 0.1, kMaxLidarRateHz = 1000.0;  // meta.json lidar.rate_hz, when not 0
 constexpr const char* kOdomHeader = "stamp,x,y,theta";
 constexpr const char* kImuHeader = "stamp,wx,wy,wz,ax,ay,az";
+const char* const kImuNames[] = {"stamp", "wx", "wy", "wz", "ax", "ay", "az"};
 
 }  // namespace
 
@@ -360,15 +389,50 @@ std::vector<OdomSample> parse_frame_dump_odometry(const std::string& text, const
 }
 
 std::vector<ImuSample> parse_frame_dump_imu(const std::string& text, const std::string& name) {
-  static const char* const kNames[] = {"stamp", "wx", "wy", "wz", "ax", "ay", "az"};
   std::vector<ImuSample> out;
   double last = 0.0;
   read_csv(text, name, kImuHeader, [&](const std::vector<std::string_view>& f, std::size_t line) {
     double v[7];
-    parse_row(f, name, line, kNames, v, last, out.empty());
+    parse_row(f, name, line, kImuNames, v, last, out.empty());
     out.push_back({v[0], Vector3d(v[1], v[2], v[3]), Vector3d(v[4], v[5], v[6])});
   });
   return out;
+}
+
+// ---- imu.csv, streamed ----------------------------------------------------------------------------
+
+struct ImuCsvReader::State {
+  State(const std::string& path) : in(open_input_file(path)), csv(path, kImuHeader) {}
+  std::ifstream in;
+  CsvLines csv;
+  std::string line;
+  double last = 0.0;
+  bool first = true;
+  bool done = false;
+};
+
+ImuCsvReader::ImuCsvReader(const std::string& path) : state_(std::make_unique<State>(path)) {}
+ImuCsvReader::~ImuCsvReader() = default;
+ImuCsvReader::ImuCsvReader(ImuCsvReader&&) noexcept = default;
+ImuCsvReader& ImuCsvReader::operator=(ImuCsvReader&&) noexcept = default;
+
+const std::string& ImuCsvReader::path() const { return state_->csv.path(); }
+
+bool ImuCsvReader::next(ImuSample& out) {
+  State& s = *state_;
+  if (s.done) return false;
+  while (std::getline(s.in, s.line)) {
+    if (!s.csv.take(s.line)) continue;
+    double v[7];
+    parse_row(s.csv.fields(), s.csv.path(), s.csv.line_number(), kImuNames, v, s.last, s.first);
+    s.first = false;
+    out = {v[0], Vector3d(v[1], v[2], v[3]), Vector3d(v[4], v[5], v[6])};
+    return true;
+  }
+  PLUMB_CHECK(!s.in.bad(), s.csv.path() << ": read error");
+  s.done = true;
+  s.csv.finish();
+  return false;
 }
 
 // ---- writer --------------------------------------------------------------------------------------
@@ -516,9 +580,13 @@ std::vector<OdomSample> FrameDumpReader::odometry() const {
 }
 
 std::vector<ImuSample> FrameDumpReader::imu() const {
-  const std::string path = join_path(dir_, "imu.csv");
-  return parse_frame_dump_imu(read_text(path), path);
+  std::vector<ImuSample> out;
+  ImuCsvReader reader = imu_reader();
+  for (ImuSample m; reader.next(m);) out.push_back(m);
+  return out;
 }
+
+ImuCsvReader FrameDumpReader::imu_reader() const { return ImuCsvReader(join_path(dir_, "imu.csv")); }
 
 Trajectory FrameDumpReader::ground_truth() const { return read_tum(join_path(dir_, "gt.tum")); }
 Trajectory FrameDumpReader::ground_truth_dense() const { return read_tum(join_path(dir_, "gt_dense.tum")); }

@@ -254,6 +254,55 @@ TEST(FrameDumpTest, MalformedCsvNamesFileAndLine) {
   EXPECT_NE(msg.find("gt.tum:1"), std::string::npos) << msg;
 }
 
+// ImuCsvReader hands out the samples parse_frame_dump_imu() gives for the same text (comments,
+// blank lines, CRLF line ends and a last line without its end included), and a bad row throws
+// only when it is reached, after the good samples before it, naming file:line.
+TEST(FrameDumpTest, ImuReaderStreamsWhatTheParserReads) {
+  const std::string dir = test::temp_path("frame_dump_imu_reader");
+  fs::create_directories(dir);
+  const std::string path = dir + "/imu.csv";
+  const std::string text =
+      "# IMU\r\nstamp,wx,wy,wz,ax,ay,az\r\n\n0.0,0.1,0.2,0.3,0.4,0.5,9.8\r\n# gap\n"
+      "0.005,-1e-3,2,3,4,5,6\n  0.010 , 1,2,3,4,5,+6\n0.015,7,8,9,10,11,12";
+  test::write_text(path, text);
+  const std::vector<ImuSample> parsed = parse_frame_dump_imu(text, path);
+  ASSERT_EQ(parsed.size(), 4u);
+  std::vector<ImuSample> streamed;
+  ImuCsvReader reader(path);
+  EXPECT_EQ(reader.path(), path);
+  for (ImuSample m; reader.next(m);) streamed.push_back(m);
+  EXPECT_FALSE(reader.next(*streamed.begin()));  // stays at the end
+  ASSERT_EQ(streamed.size(), parsed.size());
+  for (std::size_t k = 0; k < parsed.size(); ++k) {
+    EXPECT_EQ(streamed[k].stamp, parsed[k].stamp) << k;
+    EXPECT_EQ(streamed[k].gyro, parsed[k].gyro) << k;
+    EXPECT_EQ(streamed[k].accel, parsed[k].accel) << k;
+  }
+
+  test::write_text(path, "stamp,wx,wy,wz,ax,ay,az\n0.0,0,0,0,0,0,9.8\n0.005,0,0,0,0,0,9.8\n0.004,0,0,0,0,0,9.8\n");
+  ImuCsvReader bad(path);
+  ImuSample m;
+  EXPECT_TRUE(bad.next(m));
+  EXPECT_TRUE(bad.next(m));
+  std::string msg = test::error_of([&] { bad.next(m); });
+  EXPECT_NE(msg.find(path + ":4: stamp 0.004 does not increase"), std::string::npos) << msg;
+
+  test::write_text(path, "# only a comment\n");
+  ImuCsvReader empty(path);
+  msg = test::error_of([&] { empty.next(m); });
+  EXPECT_NE(msg.find(path + ": empty file"), std::string::npos) << msg;
+  test::write_text(path, "t,gx,gy,gz,ax,ay,az\n");
+  ImuCsvReader header(path);
+  msg = test::error_of([&] { header.next(m); });
+  EXPECT_NE(msg.find(path + ":1: expected the header line"), std::string::npos) << msg;
+
+  msg = test::error_of([&] { ImuCsvReader(dir + "/absent.csv"); });
+  EXPECT_NE(msg.find(dir + "/absent.csv: no such file"), std::string::npos) << msg;
+  msg = test::error_of([&] { ImuCsvReader{dir}; });
+  EXPECT_NE(msg.find("is a directory"), std::string::npos) << msg;
+  fs::remove_all(dir);
+}
+
 TEST(FrameDumpTest, MissingDirectoryAndOverwriteAreErrors) {
   const std::string dir = fresh_dir("missing");
   std::string msg = test::error_of([&] { FrameDumpReader r(dir); });

@@ -113,6 +113,31 @@ class FrameDumpWriter {
   double last_stamp_ = 0.0;
 };
 
+/// @brief imu.csv read one sample at a time, so that a long run's memory does not grow with the
+///        length of its IMU log (run_lio() feeds its estimator from one).
+///
+/// The rows are checked as parse_frame_dump_imu() checks them; a bad row throws from the next()
+/// call that reaches it, naming `path:LINE`.
+class ImuCsvReader {
+ public:
+  /// @throws plumb::Error when `path` is missing, a directory or unreadable.
+  explicit ImuCsvReader(const std::string& path);
+  ~ImuCsvReader();
+  ImuCsvReader(ImuCsvReader&&) noexcept;
+  ImuCsvReader& operator=(ImuCsvReader&&) noexcept;
+
+  /// @brief The next sample into `out`; false at the end of the file.
+  /// @throws plumb::Error `path:LINE: message` on a missing header, a wrong field count, a field
+  ///         that is not a finite number or a stamp that does not increase; `path: empty file` when
+  ///         the file ends before its header line; `path: read error`.
+  bool next(ImuSample& out);
+  const std::string& path() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
 /// @brief Lazy reader of a frame dump: opening reads meta.json and frames.csv only; frames and the
 ///        other files are read when asked for.
 /// @note Every malformed file gives plumb::Error naming the file and the line (meta.json: line and
@@ -140,6 +165,8 @@ class FrameDumpReader {
   std::vector<WheelEncoderReading> wheels() const;   ///< @throws plumb::Error when absent or malformed
   std::vector<OdomSample> odometry() const;  ///< @throws plumb::Error when absent or malformed
   std::vector<ImuSample> imu() const;        ///< @throws plumb::Error when absent or malformed
+  /// @brief imu.csv one sample at a time (see ImuCsvReader). @throws plumb::Error when absent.
+  ImuCsvReader imu_reader() const;
   Trajectory ground_truth() const;           ///< @throws plumb::Error when absent or malformed
   Trajectory ground_truth_dense() const;     ///< @throws plumb::Error when absent or malformed
   /// @brief The elements of as_built.json in file order.
