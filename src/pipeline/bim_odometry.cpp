@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <future>
-#include <system_error>
 #include <utility>
 
 #include <Eigen/Eigenvalues>
@@ -12,6 +11,7 @@
 #include "plumb/core/clock.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/core/lie.hpp"
+#include "plumb/core/parallel.hpp"
 #include "plumb/filters/voxel_grid.hpp"
 
 namespace plumb {
@@ -97,14 +97,8 @@ BimFrameResult BimOdometry::process(const PointCloud& lidar_frame, double stamp,
     PointCloud keys = key_points(lidar_frame);
     return std::make_pair(std::move(keys), seconds_since(t));
   };
-  std::future<std::pair<PointCloud, double>> keys_ahead;
-  if (correcting && settings_.threads != 1) {
-    try {
-      keys_ahead = std::async(std::launch::async, find_keys);
-    } catch (const std::system_error&) {
-      // no thread to be had: found below, after the front end
-    }
-  }
+  std::future<std::pair<PointCloud, double>> keys;
+  if (correcting) keys = start_beside(settings_.threads, find_keys);
 
   // Front end: PLICP against the local map, wheel-odometry prior, fallback to the prior.
   const ScanOdometryStep step = front_end_.add(scan.scan, odom_pose);
@@ -124,10 +118,10 @@ BimFrameResult BimOdometry::process(const PointCloud& lidar_frame, double stamp,
   out.T_world_base_uncorrected = T_world_base0_ * first_front_pose_.ominus().oplus(step.T_world_base).to_isometry();
 
   if (correcting) {
-    auto [keys, seconds] = keys_ahead.valid() ? keys_ahead.get() : find_keys();
-    out.num_key_points = keys.size();
+    auto [points, seconds] = keys.get();
+    out.num_key_points = points.size();
     out.seconds_segment = seconds;
-    correct(keys, out);
+    correct(points, out);
   }
   out.T_world_base = composer_.pose();
   ++frame_index_;

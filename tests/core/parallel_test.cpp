@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstddef>
+#include <future>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -117,6 +118,40 @@ TEST(ParallelTest, RethrowsTheLowestFailingChunk) {
   }
 }
 
+TEST(ParallelTest, StartBesideRunsOnASecondThreadOrOnTheCallersAtGet) {
+  const std::thread::id caller = std::this_thread::get_id();
+  for (int threads : {2, 0}) {
+    std::future<std::thread::id> f = start_beside(threads, [] { return std::this_thread::get_id(); });
+    EXPECT_NE(f.get(), caller) << "threads " << threads;
+  }
+  std::atomic<int> runs{0};
+  std::future<std::thread::id> f = start_beside(1, [&runs] {
+    runs.fetch_add(1);
+    return std::this_thread::get_id();
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  EXPECT_EQ(runs.load(), 0);  // deferred: nothing runs until get()
+  EXPECT_EQ(f.get(), caller);
+  EXPECT_EQ(runs.load(), 1);
+  {
+    std::future<std::thread::id> never = start_beside(1, [&runs] {
+      runs.fetch_add(1);
+      return std::this_thread::get_id();
+    });
+  }
+  EXPECT_EQ(runs.load(), 1);  // a deferred call whose result is never asked for never runs
+  // An exception arrives at get(), on any thread count.
+  for (int threads : {1, 2}) {
+    std::future<int> g = start_beside(threads, []() -> int { throw std::runtime_error("beside"); });
+    try {
+      g.get();
+      ADD_FAILURE() << "no exception, threads " << threads;
+    } catch (const std::runtime_error& e) {
+      EXPECT_STREQ(e.what(), "beside");
+    }
+  }
+}
+
 TEST(ParallelTest, PrefetchGivesTheSerialItemsAndMakesTheNextOneAhead) {
   for (int threads : {1, 2, 0}) {
     std::vector<std::atomic<int>> made(20);
@@ -165,10 +200,22 @@ TEST(ParallelTest, PrefetchRethrowsAnItemsErrorWhereTheSerialLoopMeetsIt) {
     EXPECT_EQ(got, 4u) << "threads " << threads;  // items 0-3 came before the error
   }
   // Stopping early and asking out of order: the item made ahead is dropped, the one asked for made.
-  Prefetch<int> items(2, 10, [](std::size_t i) { return static_cast<int>(i) * 3; });
-  EXPECT_EQ(items.get(0), 0);
-  EXPECT_EQ(items.get(5), 15);
-  EXPECT_EQ(items.get(6), 18);
+  // On one thread the item that would have come next is never made at all.
+  for (int threads : {1, 2}) {
+    std::vector<std::atomic<int>> made(10);
+    {
+      Prefetch<int> items(threads, 10, [&made](std::size_t i) {
+        made[i].fetch_add(1);
+        return static_cast<int>(i) * 3;
+      });
+      EXPECT_EQ(items.get(0), 0);
+      EXPECT_EQ(items.get(5), 15);
+      EXPECT_EQ(items.get(6), 18);
+    }
+    EXPECT_EQ(made[0].load() + made[5].load() + made[6].load(), 3) << "threads " << threads;
+    EXPECT_EQ(made[1].load(), threads == 1 ? 0 : 1);
+    EXPECT_EQ(made[7].load(), threads == 1 ? 0 : 1);
+  }
 }
 
 }  // namespace

@@ -14,11 +14,12 @@
 /// Threads are started per call and joined before it returns (no pool, no global state): the cost,
 /// some tens of microseconds, is why each user picks a grain of at least a few hundred points.
 
+#include <chrono>
 #include <cstddef>
 #include <functional>
 #include <future>
-#include <optional>
 #include <system_error>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -79,52 +80,65 @@ void parallel_for(int threads, std::size_t n, std::size_t grain, F&& f) {
   });
 }
 
+/// @brief `f()` started beside the caller: on a second thread when `threads` != 1 (0 = every core)
+///        and the system gives one, else deferred, to run on the calling thread when get() is
+///        called (never, if it is not).
+///
+/// Either way get() returns f()'s result or rethrows its exception at the same point of the
+/// caller's code, so a caller written against the future does the same work with the same results
+/// for any thread count, provided f() does not depend on what the caller does meanwhile. The
+/// future of a started f() waits for it when destroyed.
+template <class F>
+auto start_beside(int threads, F f) -> std::future<std::invoke_result_t<F&>> {
+  if (threads != 1) {
+    try {
+      return std::async(std::launch::async, f);
+    } catch (const std::system_error&) {
+      // no thread to be had: deferred to the caller's get()
+    }
+  }
+  return std::async(std::launch::deferred, std::move(f));
+}
+
 /// @brief A pipeline stage: items 0, 1, 2, ... made by `make(i)` one ahead of their consumer, on a
 ///        second thread, while the consumer works on the item before (reading and deskewing the
 ///        next frame while the estimator processes this one).
 ///
 /// `make` must depend on i alone, never on what the consumer did with earlier items: the items,
 /// and so everything computed from them, are then the same for any thread count. With threads == 1
-/// (or when the system refuses a thread) each item is made on the calling thread when asked for.
-/// An exception of make(i) is rethrown by get(i), where the serial loop would have met it. At most
-/// two items exist at once; the destructor waits for a pending one.
+/// (or when the system refuses a thread) each item is made on the calling thread when asked for
+/// (start_beside()). An exception of make(i) is rethrown by get(i), where the serial loop would
+/// have met it. At most two items exist at once, and make() never runs twice at once.
 template <class T>
 class Prefetch {
  public:
   /// @param threads the caller's thread setting (1 = no second thread; 0 = every core, as >= 2)
   /// @param n number of items; get() is called with i = 0, 1, ... (it may stop early)
   Prefetch(int threads, std::size_t n, std::function<T(std::size_t)> make)
-      : ahead_(threads != 1), n_(n), make_(std::move(make)) {}
+      : threads_(threads), n_(n), make_(std::move(make)) {}
   Prefetch(const Prefetch&) = delete;
   Prefetch& operator=(const Prefetch&) = delete;
-  ~Prefetch() {
-    if (pending_.valid()) pending_.wait();
-  }
+  ~Prefetch() { settle(pending_); }
 
   /// @brief Item i (i = the previous call's i + 1, starting at 0); starts making item i + 1.
   T get(std::size_t i) {
-    std::optional<T> item;
-    if (pending_.valid() && pending_index_ == i) {
-      std::future<T> f = std::move(pending_);
-      item.emplace(f.get());
-    } else {
-      if (pending_.valid()) pending_.wait();  // out of order: drop the item made ahead
-      pending_ = {};
-      item.emplace(make_(i));
+    std::future<T> ahead = std::move(pending_);
+    const bool made_ahead = ahead.valid() && pending_index_ == i;
+    if (!made_ahead) settle(ahead);  // out of order: the item made ahead is dropped
+    T item = made_ahead ? ahead.get() : make_(i);
+    if (i + 1 < n_) {
+      pending_ = start_beside(threads_, [this, next = i + 1] { return make_(next); });
+      pending_index_ = i + 1;
     }
-    if (ahead_ && i + 1 < n_) {
-      try {
-        pending_ = std::async(std::launch::async, make_, i + 1);
-        pending_index_ = i + 1;
-      } catch (const std::system_error&) {
-        ahead_ = false;  // no thread to be had: the next items are made when asked for
-      }
-    }
-    return std::move(*item);
+    return item;
   }
 
  private:
-  bool ahead_;
+  // Waits for an item being made on the other thread; a deferred one is never made.
+  static void settle(std::future<T>& f) {
+    if (f.valid() && f.wait_for(std::chrono::seconds(0)) != std::future_status::deferred) f.wait();
+  }
+  int threads_;
   std::size_t n_;
   std::function<T(std::size_t)> make_;
   std::future<T> pending_;
