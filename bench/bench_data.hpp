@@ -11,6 +11,8 @@
 
 #include <benchmark/benchmark.h>
 
+#include "build_tree.hpp"
+
 #include <dlfcn.h>
 
 /// @brief `fn` where PCL is built, else nullptr: the peer argument of register_with_peers().
@@ -29,14 +31,8 @@
 
 namespace plumb::bench {
 
-inline std::string data_dir() {
-  if (const char* env = std::getenv("PLUMB_DATA_DIR"); env != nullptr && *env != '\0') return env;
-#ifdef PLUMB_DATA_DIR
-  return PLUMB_DATA_DIR;
-#else
-  return ".";
-#endif
-}
+/// @brief PLUMB_DATA_DIR, else the build tree's CMake cache variable of that name (build_tree.hpp).
+inline std::string data_dir() { return test::data_dir(); }
 
 /// @brief Absolute path of a file under the data directory.
 inline std::string data_path(const std::string& relative) { return data_dir() + "/" + relative; }

@@ -26,7 +26,7 @@ inline std::string program_path(const std::string& name) {
 }
 
 /// @brief The directory of the BCF 2.1 schemas.
-inline std::string bcf_schema_dir() { return std::string(PLUMB_DATA_DIR) + "/bcf/2.1"; }
+inline std::string bcf_schema_dir() { return test::data_dir() + "/bcf/2.1"; }
 
 /// @brief Why the archives cannot be checked here (python3, xmllint or the schemas missing), empty
 /// when they can: the caller skips with it.

@@ -30,7 +30,7 @@ inline std::string read_text(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
-inline std::string cli_binary() { return std::string(PLUMB_BINARY_DIR) + "/examples/plumb"; }
+inline std::string cli_binary() { return test::binary_dir() + "/examples/plumb"; }
 
 /// @brief Run the built program PATH with ARGS (quoted by the caller), with per-test output files,
 /// since ctest may run the tests of one binary in parallel.

@@ -5,26 +5,18 @@
 /// @brief Locating the shared real data (see shared/data/SOURCES.md) from tests.
 ///
 /// The directory is the environment variable PLUMB_DATA_DIR when set, else the CMake cache variable
-/// of the same name compiled in. A test that needs a file calls PLUMB_REQUIRE_DATA(path), which
+/// of the same name. A test that needs a file calls PLUMB_REQUIRE_DATA(path), which
 /// skips the test with a message when the file is missing (the CI script makes a missing data
 /// directory an error before any test runs).
 
-#include <cstdlib>
 #include <fstream>
 #include <string>
 
 #include <gtest/gtest.h>
 
-namespace plumb::test {
+#include "build_tree.hpp"
 
-inline std::string data_dir() {
-  if (const char* env = std::getenv("PLUMB_DATA_DIR"); env != nullptr && *env != '\0') return env;
-#ifdef PLUMB_DATA_DIR
-  return PLUMB_DATA_DIR;
-#else
-  return "";
-#endif
-}
+namespace plumb::test {
 
 /// @brief Absolute path of a file under the data directory, e.g. data_path("cloud3d/pcl_test/bun0.pcd").
 inline std::string data_path(const std::string& relative) { return data_dir() + "/" + relative; }
@@ -32,13 +24,7 @@ inline std::string data_path(const std::string& relative) { return data_dir() + 
 inline bool file_exists(const std::string& path) { return std::ifstream(path).good(); }
 
 /// @brief A fresh scratch directory path under the build tree for files a test writes.
-inline std::string temp_path(const std::string& name) {
-#ifdef PLUMB_BINARY_DIR
-  return std::string(PLUMB_BINARY_DIR) + "/test_tmp_" + name;
-#else
-  return "/tmp/plumb_test_" + name;
-#endif
-}
+inline std::string temp_path(const std::string& name) { return binary_dir() + "/test_tmp_" + name; }
 
 }  // namespace plumb::test
 

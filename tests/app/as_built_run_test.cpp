@@ -27,7 +27,7 @@ class AsBuiltRunTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     mesh_ = new plumb::bim::BimMesh(plumb::bim::build_mesh(
-        plumb::bim::read_ifc(std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc"),
+        plumb::bim::read_ifc(plumb::test::source_dir() + "/examples/data/demo_office.ifc"),
         plumb::bim::mesh_settings_with_spaces()));
     dir_ = plumb::test::temp_path("as_built_dump_" + std::to_string(::getpid()));
     std::filesystem::remove_all(dir_);

@@ -30,7 +30,7 @@ namespace fs = std::filesystem;
 
 const bim::BimMesh& office() {
   static const bim::BimMesh mesh = bim::build_mesh(
-      bim::read_ifc(std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc"), bim::mesh_settings_with_spaces());
+      bim::read_ifc(test::source_dir() + "/examples/data/demo_office.ifc"), bim::mesh_settings_with_spaces());
   return mesh;
 }
 

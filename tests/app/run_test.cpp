@@ -25,7 +25,7 @@ class BimOdometryRunTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     mesh_ = new plumb::bim::BimMesh(
-        plumb::bim::build_mesh(plumb::bim::read_ifc(std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc")));
+        plumb::bim::build_mesh(plumb::bim::read_ifc(plumb::test::source_dir() + "/examples/data/demo_office.ifc")));
     // Per process: ctest runs the tests of this binary in parallel processes.
     dir_ = plumb::test::temp_path("bim_odometry_dump_" + std::to_string(::getpid()));
     std::filesystem::remove_all(dir_);

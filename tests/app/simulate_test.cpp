@@ -33,7 +33,7 @@ namespace fs = std::filesystem;
 
 const bim::BimMesh& demo_office() {
   static const bim::BimMesh mesh =
-      bim::build_mesh(bim::read_ifc(std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc"));
+      bim::build_mesh(bim::read_ifc(test::source_dir() + "/examples/data/demo_office.ifc"));
   return mesh;
 }
 
@@ -165,7 +165,7 @@ TEST(ReadLidarModelTest, ReadsAFileAndNamesOneItCannotRead) {
   test::write_text(path, R"({"columns": 900})");
   EXPECT_EQ(test::error_of([&] { read_lidar_model(path); }).rfind(path + ": ", 0), 0u);
   fs::remove(path);
-  const std::string missing = std::string(PLUMB_BINARY_DIR) + "/no_such_lidar.json";
+  const std::string missing = test::binary_dir() + "/no_such_lidar.json";
   EXPECT_NE(test::error_of([&] { read_lidar_model(missing); }).find(missing), std::string::npos);
 }
 

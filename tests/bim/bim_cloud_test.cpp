@@ -12,6 +12,7 @@
 #include "plumb/bim/ifc.hpp"
 #include "plumb/bim/sample.hpp"
 #include "plumb/core/error.hpp"
+#include "test_data.hpp"
 
 namespace {
 
@@ -23,7 +24,7 @@ std::string upper(std::string s) {
 TEST(BimCloudTest, SamplesTheStructureWithoutDoorsWindowsSpacesOrFurniture) {
   // With the spaces meshed, so that leaving them out is the cloud's doing.
   const plumb::bim::BimMesh mesh =
-      plumb::bim::build_mesh(plumb::bim::read_ifc(std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc"),
+      plumb::bim::build_mesh(plumb::bim::read_ifc(plumb::test::source_dir() + "/examples/data/demo_office.ifc"),
                              plumb::bim::mesh_settings_with_spaces());
   const plumb::PointCloud cloud = plumb::bim::sample_bim_cloud(mesh, 0.2);
   ASSERT_GT(cloud.size(), 1000u);

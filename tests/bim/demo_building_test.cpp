@@ -19,6 +19,7 @@
 #include "plumb/bim/demo_building.hpp"
 #include "plumb/bim/mesh.hpp"
 #include "plumb/core/error.hpp"
+#include "test_data.hpp"
 
 namespace plumb::bim {
 namespace {
@@ -299,7 +300,7 @@ TEST(DemoBuildingTest, SameSettingsSameBytes) {
 }
 
 TEST(DemoBuildingTest, CommittedExampleIsWhatTheGeneratorWrites) {
-  const std::string path = std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc";
+  const std::string path = test::source_dir() + "/examples/data/demo_office.ifc";
   std::ifstream in(path, std::ios::binary);
   ASSERT_TRUE(in.good()) << path;
   std::ostringstream ss;
@@ -311,11 +312,11 @@ TEST(DemoBuildingTest, CommittedExampleIsWhatTheGeneratorWrites) {
 
 TEST(DemoBuildingTest, BoxesMatchWebIfc) {
   // Golden made by scripts/ifc_golden/webifc_bbox.cjs from examples/data/demo_office.ifc.
-  const std::string golden_path = std::string(PLUMB_SOURCE_DIR) + "/tests/bim/golden/demo_office_webifc_bbox.json";
+  const std::string golden_path = test::source_dir() + "/tests/bim/golden/demo_office_webifc_bbox.json";
   std::ifstream in(golden_path);
   ASSERT_TRUE(in.good()) << golden_path;
   const nlohmann::json golden = nlohmann::json::parse(in);
-  const BimMesh mesh = build_mesh(read_ifc(std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc"));
+  const BimMesh mesh = build_mesh(read_ifc(test::source_dir() + "/examples/data/demo_office.ifc"));
   // web-ifc meshed every wall, slab, door, window and column.
   EXPECT_EQ(golden["elements"].size(), mesh.elements.size());
   for (const auto& [id_text, ref] : golden["elements"].items()) {
@@ -345,11 +346,11 @@ TEST(DemoBuildingTest, SurfaceAreasMatchWebIfc) {
   // opening (perimeter x wall thickness) that build_mesh, which clips the wall's own faces, does not
   // add; the difference must stay within those reveals (an opening not cut at all would leave the
   // wall larger than web-ifc's by its two face areas, which is more).
-  const std::string golden_path = std::string(PLUMB_SOURCE_DIR) + "/tests/bim/golden/demo_office_webifc_area.json";
+  const std::string golden_path = test::source_dir() + "/tests/bim/golden/demo_office_webifc_area.json";
   std::ifstream in(golden_path);
   ASSERT_TRUE(in.good()) << golden_path;
   const nlohmann::json golden = nlohmann::json::parse(in);
-  const IfcModel model = read_ifc(std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc");
+  const IfcModel model = read_ifc(test::source_dir() + "/examples/data/demo_office.ifc");
   const BimMesh mesh = build_mesh(model);
   const StepFile& f = model.step;
   std::map<std::uint32_t, double> reveal;  // wall id -> reveal area of its openings

@@ -17,7 +17,7 @@
 namespace {
 
 void compare_with_webifc(const std::string& model_rel, const std::string& golden_name, double tol) {
-  const std::string golden_path = std::string(PLUMB_SOURCE_DIR) + "/tests/bim/golden/" + golden_name;
+  const std::string golden_path = plumb::test::source_dir() + "/tests/bim/golden/" + golden_name;
   std::ifstream in(golden_path);
   ASSERT_TRUE(in.good()) << golden_path;
   const nlohmann::json golden = nlohmann::json::parse(in);

@@ -312,7 +312,7 @@ TEST_F(CliTest, CloudCommandOptionsRejectNanInf) {
 }
 
 TEST_F(CliTest, IfcAndBuildingOptionsRejectNanInfWithShortMessages) {
-  const std::string model = quote(std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc");
+  const std::string model = quote(test::source_dir() + "/examples/data/demo_office.ifc");
   const std::string out = quote(test::temp_path("bad_input_out.ply"));
   const std::string ifc = quote(test::temp_path("bad_input_building.ifc"));
   const std::vector<std::pair<std::string, std::string>> cases = {
@@ -373,7 +373,7 @@ TEST_F(CliTest, DirectoriesGivenAsFilesAreNamedAsSuch) {
 // A LiDAR model file whose column count is not a whole number in range is refused by name: a
 // fractional or boolean value used to be truncated, and 1e10 converted to int is undefined.
 TEST_F(CliTest, SimulateLidarModelColumnsMustBeAWholeNumberInRange) {
-  const std::string model = std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc";
+  const std::string model = test::source_dir() + "/examples/data/demo_office.ifc";
   for (const char* columns : {"2.5", "true", "1e10", "0", "100001"}) {
     const std::string json = write_lines("bad_input_lidar.json",
                                          {std::string("{\"elevations_deg\": [-15, 0, 15], \"columns\": ") + columns + "}"});

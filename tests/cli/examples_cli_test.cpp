@@ -23,7 +23,7 @@ using test::run_cli;
 
 /// Run examples/NN_name (built next to the CLI) with ARGS.
 test::RunResult run_example(const std::string& name, const std::string& args) {
-  return test::run_program(std::string(PLUMB_BINARY_DIR) + "/examples/plumb_example_" + name, args);
+  return test::run_program(test::binary_dir() + "/examples/plumb_example_" + name, args);
 }
 
 TEST_F(CliTest, Example01CloudBasicsRuns) {
@@ -33,7 +33,7 @@ TEST_F(CliTest, Example01CloudBasicsRuns) {
 }
 
 TEST_F(CliTest, Example02FeedsFramesAndEndsNearTheTruth) {
-  const std::string model = std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc";
+  const std::string model = test::source_dir() + "/examples/data/demo_office.ifc";
   const std::string dir = test::temp_path("example02_dump_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   ASSERT_EQ(run_cli("simulate '" + model + "' -o '" + dir + "' --length 4 --seed 2").exit_code, 0);
@@ -64,7 +64,7 @@ TEST_F(CliTest, Example02WithoutArgumentsPrintsUsage) {
 }
 
 TEST_F(CliTest, Example02ReportsAMissingDump) {
-  const std::string model = std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc";
+  const std::string model = test::source_dir() + "/examples/data/demo_office.ifc";
   const test::RunResult r = run_example("02_bim_odometry", "'" + model + "' /nonexistent/dump");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("error:"), std::string::npos) << r.err;

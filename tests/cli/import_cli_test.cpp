@@ -51,7 +51,7 @@ class ImportCliTest : public test::CliTest {
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     const bim::BimMesh mesh =
-        bim::build_mesh(bim::read_ifc(std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc"));
+        bim::build_mesh(bim::read_ifc(test::source_dir() + "/examples/data/demo_office.ifc"));
     sim::ScenarioSettings s = sim::scenario_defaults(sim::ScenarioKind::kIndoor);
     s.lidar = sim::lidar_preset("vlp16");
     s.length = 2.0;
@@ -76,7 +76,7 @@ class ImportCliTest : public test::CliTest {
     for (char& c : tag) c = c == ' ' || c == '-' ? '_' : c;
     const std::string path = dir_ + "/" + compression + "_" + layout + "_" + std::to_string(frames) + tag + ".bag";
     if (!fs::exists(path)) {
-      const std::string command = std::string(kPython) + " '" + PLUMB_SOURCE_DIR + "/tests/cli/bag_from_dump.py' '" +
+      const std::string command = std::string(kPython) + " '" + test::source_dir() + "/tests/cli/bag_from_dump.py' '" +
                                   dump() + "' '" + path + "' --compression " + compression + " --layout " + layout +
                                   " --frames " + std::to_string(frames) + " " + options;
       EXPECT_EQ(shell(command), 0) << command;

@@ -56,7 +56,7 @@ class ImportMcapCliTest : public test::CliTest {
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     const bim::BimMesh mesh =
-        bim::build_mesh(bim::read_ifc(std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc"));
+        bim::build_mesh(bim::read_ifc(test::source_dir() + "/examples/data/demo_office.ifc"));
     sim::ScenarioSettings s = sim::scenario_defaults(sim::ScenarioKind::kIndoor);
     s.lidar = sim::lidar_preset("vlp16");
     s.length = 2.0;
@@ -80,7 +80,7 @@ class ImportMcapCliTest : public test::CliTest {
     for (char& c : tag) c = c == ' ' || c == '-' ? '_' : c;
     const std::string path = dir_ + "/" + compression + "_" + layout + "_" + std::to_string(frames) + tag + ".mcap";
     if (!fs::exists(path)) {
-      const std::string command = node_command() + " '" + PLUMB_SOURCE_DIR + "/tests/cli/mcap_writer/mcap_from_dump.cjs' '" +
+      const std::string command = node_command() + " '" + test::source_dir() + "/tests/cli/mcap_writer/mcap_from_dump.cjs' '" +
                                   dump() + "' '" + path + "' --compression " + compression + " --layout " + layout +
                                   " --frames " + std::to_string(frames) + " " + options;
       EXPECT_EQ(run_shell(command), 0) << command;

@@ -52,7 +52,7 @@ TEST_F(CliTest, MakeDemoBuildingDefaultIsTheCommittedExample) {
   const test::RunResult r = run_cli("make-demo-building -o '" + path + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("9 doors"), std::string::npos) << r.out;
-  EXPECT_TRUE(test::read_text(path) == test::read_text(std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc"));
+  EXPECT_TRUE(test::read_text(path) == test::read_text(test::source_dir() + "/examples/data/demo_office.ifc"));
 }
 
 TEST_F(CliTest, MakeDemoBuildingRejectsRoomsThatDoNotFit) {

@@ -32,7 +32,7 @@ using test::CliTest;
 using test::run_cli;
 using Json = nlohmann::json;
 
-std::string office_ifc() { return std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc"; }
+std::string office_ifc() { return test::source_dir() + "/examples/data/demo_office.ifc"; }
 
 std::string q(const std::string& s) { return "'" + s + "'"; }
 

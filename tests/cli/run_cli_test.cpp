@@ -28,7 +28,7 @@ using test::CliTest;
 using test::run_cli;
 using Json = nlohmann::json;
 
-std::string demo_model() { return std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc"; }
+std::string demo_model() { return test::source_dir() + "/examples/data/demo_office.ifc"; }
 
 /// A short run in the demo office (16-line LiDAR to keep it quick), one per test process.
 std::string simulate_demo_dump(const std::string& name, double length) {

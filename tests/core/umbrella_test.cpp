@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The umbrella header compiles on its own and names every public header of the source tree.
 #include "plumb/plumb.hpp"
+#include "test_data.hpp"
 
 #include <filesystem>
 #include <fstream>
@@ -13,7 +14,7 @@ namespace {
 
 TEST(UmbrellaTest, ListsEveryPublicHeader) {
   namespace fs = std::filesystem;
-  const fs::path include_dir = fs::path(PLUMB_SOURCE_DIR) / "include";
+  const fs::path include_dir = fs::path(plumb::test::source_dir()) / "include";
   std::ifstream in(include_dir / "plumb" / "plumb.hpp");
   ASSERT_TRUE(in.good());
   std::stringstream text;

@@ -36,7 +36,7 @@ struct BunnyGolden {
 
 BunnyGolden read_golden() {
   const std::string path =
-      std::string(PLUMB_SOURCE_DIR) + "/tests/features/golden/bunny_open3d_fpfh.txt";
+      test::source_dir() + "/tests/features/golden/bunny_open3d_fpfh.txt";
   std::ifstream in(path);
   if (!in) throw std::runtime_error("cannot open " + path);
   BunnyGolden g;

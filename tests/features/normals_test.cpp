@@ -208,7 +208,7 @@ TEST(NormalsTest, MatchesOpen3dOnBunny) {
   PointCloud cloud = io::read_pcd(path);
   // Open3D's normals from the FPFH golden file (scripts/fpfh_golden/make_golden.py), estimated
   // with KDTreeSearchParamHybrid(radius, max_nn).
-  std::ifstream in(std::string(PLUMB_SOURCE_DIR) + "/tests/features/golden/bunny_open3d_fpfh.txt");
+  std::ifstream in(test::source_dir() + "/tests/features/golden/bunny_open3d_fpfh.txt");
   ASSERT_TRUE(in.good());
   std::string line, key;
   std::size_t n = 0, max_nn = 0;

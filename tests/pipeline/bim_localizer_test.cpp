@@ -48,7 +48,7 @@ struct Building {
 };
 
 std::string model_path(const std::string& name) {
-  if (name == "demo_office") return std::string(PLUMB_SOURCE_DIR) + "/examples/data/demo_office.ifc";
+  if (name == "demo_office") return plumb::test::source_dir() + "/examples/data/demo_office.ifc";
   return plumb::test::data_path("ifc/buildings/" + name + ".ifc");
 }
 
