@@ -324,8 +324,10 @@ void loam_associate_map(const LoamMap& map, const LoamFeatures& cur, const Eigen
       for (std::size_t i = begin; i < end; ++i) {
         const Vector3f& p = queries.points[i];
         if (!p.allFinite()) continue;
-        const std::size_t found = tree->knn(R * p + t, kk, idx, d);
-        if (found < kk || d[found - 1] > max_sq) continue;
+        // Bounded by the gate: a query whose k-th neighbour lies beyond it finds fewer than k (and
+        // is dropped, as it would be), and the search prunes what lies beyond from the start.
+        const std::size_t found = tree->knn(R * p + t, kk, idx, d, max_sq);
+        if (found < kk) continue;
         Matrix3d C;
         loam_neighbour_moments(features, idx, found, mean, C);
         eig.computeDirect(C);
