@@ -297,8 +297,77 @@ LoamResult loam_scan_to_scan(const LoamFeatures& prev, const LoamFeatures& cur,
   return loam_detail::solve_se3(T_prev_cur_guess, settings, associate);
 }
 
+std::size_t LoamMapCache::hits() const {
+  std::size_t n = 0;
+  for (const Slot& s : slots_) n += s.hits;
+  return n;
+}
+
+std::size_t LoamMapCache::searches() const {
+  std::size_t n = 0;
+  for (const Slot& s : slots_) n += s.searches;
+  return n;
+}
+
+LoamMapCache::Slot& LoamMapCache::slot(std::size_t i, const void* queries, const void* tree, std::size_t size) {
+  if (slots_.size() <= i) slots_.resize(i + 1);
+  Slot& s = slots_[i];
+  if (s.queries != queries || s.tree != tree || s.size != size) {
+    s = Slot{};
+    s.queries = queries;
+    s.tree = tree;
+    s.size = size;
+    s.entries.assign(size, Entry{});
+  }
+  return s;
+}
+
+namespace {
+
+// The map points nearest the moved query `q` from a cache entry, when they are provably the k
+// nearest within the gate (or provably fewer than k lie within it): true, with the count in
+// `found` and the points in idx / d, ascending. False when a tree search is needed.
+bool nearest_from_cache(const LoamMapCache::Entry& e, const Vector3f& q, std::size_t k, float max_sq,
+                        const PointCloud& features, std::size_t* idx, float* d, std::size_t& found) {
+  if (e.radius_sq < 0.0f) return false;
+  // Every point not in e.near lies at least sqrt(radius_sq) from e.at, so at least
+  // sqrt(radius_sq) - |q - e.at| from q; 1e-4 of margin covers the rounding of float distances.
+  const double moved = (q - e.at).cast<double>().norm();
+  const double reach = std::sqrt(static_cast<double>(e.radius_sq)) - moved;
+  if (!(reach > 0.0)) return false;
+  const double beyond_sq = reach * reach * (1.0 - 1e-4);
+  found = 0;
+  float all[16];
+  for (std::size_t j = 0; j < e.num_near; ++j) {
+    const Vector3f& p = features.points[e.near[j]];
+    // Summed as the kd-tree sums (dimension order, float): the same distances.
+    const float dx = p.x() - q.x(), dy = p.y() - q.y(), dz = p.z() - q.z();
+    const float dj = dx * dx + dy * dy + dz * dz;
+    all[j] = dj;
+    if (!(dj <= max_sq) || (found == k && !(dj < d[k - 1]))) continue;
+    detail::insert_k_best(d, idx, found, k, dj, e.near[j]);
+  }
+  if (found < k) return static_cast<double>(max_sq) < beyond_sq;  // none beyond the radius is within the gate
+  if (!(static_cast<double>(d[k - 1]) < beyond_sq)) return false;
+  // Two points at exactly the same distance are ordered by the tree's visiting order, which the
+  // cache does not know: such a query is searched.
+  for (std::size_t j = 0; j + 1 < k; ++j) {
+    if (d[j] == d[j + 1]) return false;
+  }
+  std::size_t within = 0;
+  for (std::size_t j = 0; j < e.num_near; ++j) within += all[j] <= d[k - 1] ? 1 : 0;
+  return within == k;
+}
+
+}  // namespace
+
 void loam_associate_map(const LoamMap& map, const LoamFeatures& cur, const Eigen::Isometry3d& T,
-                               const LoamSettings& settings, std::vector<LoamCorrespondence>& factors) {
+                        const LoamSettings& settings, std::vector<LoamCorrespondence>& factors) {
+  loam_associate_map(map, cur, T, settings, factors, nullptr);
+}
+
+void loam_associate_map(const LoamMap& map, const LoamFeatures& cur, const Eigen::Isometry3d& T,
+                        const LoamSettings& settings, std::vector<LoamCorrespondence>& factors, LoamMapCache* cache) {
   using loam_detail::Factor;
   PLUMB_CHECK(settings.map_neighbors >= 3, "loam_associate_map: map_neighbors must be >= 3, got " << settings.map_neighbors);
   PLUMB_CHECK(settings.threads >= 0, "loam_associate_map: threads must be >= 0 (0 = every core), got " << settings.threads);
@@ -307,14 +376,26 @@ void loam_associate_map(const LoamMap& map, const LoamFeatures& cur, const Eigen
   const Eigen::Matrix3f R = T.linear().cast<float>();
   const Eigen::Vector3f t = T.translation().cast<float>();
   const std::size_t kk = std::min<std::size_t>(k, 64);
+  // With a cache, a tree search asks for twice the neighbours needed (at most 16), so that the
+  // next rounds can be answered from them.
+  constexpr std::size_t kMaxCached = sizeof(LoamMapCache::Entry::near) / sizeof(std::uint32_t);
+  const bool caching = cache != nullptr && kk < kMaxCached;
+  const std::size_t k_search = caching ? std::min(2 * kk, kMaxCached) : kk;
   // The queries are independent: chunks of them run on settings.threads threads, their factors
-  // appended in query order (the same list for any thread count).
+  // appended in query order (the same list for any thread count); each query has its own entry
+  // in the cache.
   constexpr std::size_t kGrain = 256;
   // For each finite query moved by T: the mean and eigen-decomposed covariance of its k nearest
   // map features (none farther than the gate), handed to `accept`, which appends its factor or not.
+  std::size_t slot_index = 0;
   auto associate = [&](const PointCloud& queries, const std::optional<KdTree3f>& tree, const PointCloud& features,
                        auto accept) {
+    LoamMapCache::Slot* slot =
+        caching && tree ? &cache->slot(slot_index, &queries, &*tree, queries.size()) : nullptr;
+    ++slot_index;
     if (!tree) return;
+    // Per chunk: queries answered from the cache, and by a tree search.
+    std::vector<std::size_t> hits(slot ? chunk_count(queries.size(), kGrain) : 0, 0), searches(hits);
     parallel_append(settings.threads, queries.size(), kGrain, factors,
                     [&](std::size_t begin, std::size_t end, std::vector<LoamCorrespondence>& out) {
       std::size_t idx[64];
@@ -324,16 +405,50 @@ void loam_associate_map(const LoamMap& map, const LoamFeatures& cur, const Eigen
       for (std::size_t i = begin; i < end; ++i) {
         const Vector3f& p = queries.points[i];
         if (!p.allFinite()) continue;
-        // Bounded by the gate: a query whose k-th neighbour lies beyond it finds fewer than k (and
-        // is dropped, as it would be), and the search prunes what lies beyond from the start.
-        const std::size_t found = tree->knn(R * p + t, kk, idx, d, max_sq);
+        const Vector3f q = R * p + t;
+        std::size_t found = 0;
+        LoamMapCache::Entry* e = slot ? &slot->entries[i] : nullptr;
+        if (e != nullptr && nearest_from_cache(*e, q, kk, max_sq, features, idx, d, found)) {
+          ++hits[begin / kGrain];
+        } else {
+          // Bounded by the gate: a query whose k-th neighbour lies beyond it finds fewer than k
+          // (and is dropped, as it would be), and the search prunes what lies beyond from the start.
+          found = tree->knn(q, k_search, idx, d, max_sq);
+          if (e != nullptr) {
+            ++searches[begin / kGrain];
+            e->at = q;
+            e->num_near = static_cast<std::uint8_t>(found);
+            for (std::size_t j = 0; j < found; ++j) e->near[j] = static_cast<std::uint32_t>(idx[j]);
+            // Fewer found than asked for: every other point lies beyond the gate.
+            e->radius_sq = found == k_search ? d[found - 1] : max_sq;
+          }
+          found = std::min(found, kk);
+        }
         if (found < kk) continue;
+        if (e != nullptr && e->num_used == kk &&
+            std::equal(idx, idx + kk, e->used, [](std::size_t a, std::uint32_t b) { return a == b; })) {
+          if (e->has_factor) out.push_back(e->factor);  // the same neighbours: the same correspondence
+          continue;
+        }
         Matrix3d C;
         loam_neighbour_moments(features, idx, found, mean, C);
         eig.computeDirect(C);
+        const std::size_t before = out.size();
         accept(p, idx, mean, eig, out);
+        if (e != nullptr) {
+          e->num_used = static_cast<std::uint8_t>(kk);
+          for (std::size_t j = 0; j < kk; ++j) e->used[j] = static_cast<std::uint32_t>(idx[j]);
+          e->has_factor = out.size() > before;
+          if (e->has_factor) e->factor = out.back();
+        }
       }
     });
+    if (slot != nullptr) {
+      for (std::size_t c = 0; c < hits.size(); ++c) {
+        slot->hits += hits[c];
+        slot->searches += searches[c];
+      }
+    }
   };
   auto edge = [&](const Vector3f& p, const std::size_t*, const Vector3d& mean,
                   const Eigen::SelfAdjointEigenSolver<Matrix3d>& eig, std::vector<LoamCorrespondence>& out) {
@@ -362,8 +477,9 @@ LoamResult loam_scan_to_map(const LoamMap& map, const LoamFeatures& cur,
   using loam_detail::Factor;
   loam_detail::check_settings(settings, T_map_cur_guess, "loam_scan_to_map");
   PLUMB_CHECK(settings.map_neighbors <= 64, "loam_scan_to_map: map_neighbors must be <= 64, got " << settings.map_neighbors);
+  LoamMapCache cache;  // the rounds of this solve move the queries little: most reuse their neighbours
   auto associate = [&](const Eigen::Isometry3d& T, std::vector<Factor>& factors) {
-    loam_associate_map(map, cur, T, settings, factors);
+    loam_associate_map(map, cur, T, settings, factors, &cache);
   };
   return loam_detail::solve_se3(T_map_cur_guess, settings, associate);
 }

@@ -291,6 +291,7 @@ struct HybridLio::Frame {
   bool converged = false;
   std::size_t num_matched = 0;
   std::vector<LoamCorrespondence> corr;
+  LoamMapCache map_cache;       ///< the LOAM map neighbours of the earlier rounds
   std::vector<Vector3d> s_imu;  ///< corr[k].p in the IMU frame
   ImuState xi, xj;              ///< the previous and the current state being solved for
 };
@@ -451,7 +452,7 @@ void HybridLio::extract(Frame& f, const PointCloud& frame_lidar) const {
   }
 }
 
-std::size_t HybridLio::associate(const Frame& f, LioFrameMode m, const ImuState& x,
+std::size_t HybridLio::associate(Frame& f, LioFrameMode m, const ImuState& x,
                                  std::vector<LoamCorrespondence>& corr) {
   const HybridLioSettings& set = settings_;
   auto stale = [&](const Vector3d& at, std::size_t frame) {
@@ -468,12 +469,13 @@ std::size_t HybridLio::associate(const Frame& f, LioFrameMode m, const ImuState&
       e.points = edge_map_.points();
       p.points = plane_map_.points();
       loam_tree_.emplace(std::move(e), std::move(p));
+      f.map_cache.clear();
       loam_built_at_ = f.here;
       loam_built_frame_ = num_frames_;
     }
   }
   if (m == LioFrameMode::kLoam) {
-    loam_associate_map(*loam_tree_, f.feats, T_world_lidar, ls, corr);
+    loam_associate_map(*loam_tree_, f.feats, T_world_lidar, ls, corr, &f.map_cache);
     return corr.size();
   }
   if (!point_tree_ || stale(point_built_at_, point_built_frame_)) {
@@ -497,7 +499,8 @@ std::size_t HybridLio::associate(const Frame& f, LioFrameMode m, const ImuState&
   // do not count (they fix neither x, y nor yaw).
   if (loam_in_icp && matched >= set.solver.min_correspondences) {
     const std::size_t before = corr.size();
-    loam_associate_map(*loam_tree_, set.solver.icp_keep_loam ? f.feats : f.ground_feats, T_world_lidar, ls, corr);
+    loam_associate_map(*loam_tree_, set.solver.icp_keep_loam ? f.feats : f.ground_feats, T_world_lidar, ls, corr,
+                       &f.map_cache);
     matched += corr.size() - before;
   }
   return matched;

@@ -176,5 +176,123 @@ TEST(LoamAssociateMapTest, PlanesNeedTwoDirectionsOfSpread) {
   }
 }
 
+// A room of noisy walls and floor (plane map) with vertical edges at its corners (edge map).
+LoamMap noisy_room(Rng& rng) {
+  PointCloud edges, planes;
+  auto noisy = [&rng](double x, double y, double z) {
+    return Vector3f(static_cast<float>(x + 0.01 * rng.normal()), static_cast<float>(y + 0.01 * rng.normal()),
+                    static_cast<float>(z + 0.01 * rng.normal()));
+  };
+  for (int i = 0; i < 4000; ++i) {
+    const double u = rng.uniform(-6.0, 6.0), v = rng.uniform(0.0, 3.0);
+    switch (i % 5) {
+      case 0: planes.points.push_back(noisy(u, -4.0, v)); break;
+      case 1: planes.points.push_back(noisy(u, 4.0, v)); break;
+      case 2: planes.points.push_back(noisy(-6.0, u * 4.0 / 6.0, v)); break;
+      case 3: planes.points.push_back(noisy(6.0, u * 4.0 / 6.0, v)); break;
+      default: planes.points.push_back(noisy(u, rng.uniform(-4.0, 4.0), 0.0)); break;
+    }
+  }
+  for (int i = 0; i < 400; ++i) {
+    const double x = i % 2 == 0 ? -6.0 : 6.0, y = (i / 2) % 2 == 0 ? -4.0 : 4.0;
+    edges.points.push_back(noisy(x, y, rng.uniform(0.0, 3.0)));
+  }
+  // A few points twice: equal distances from any query, which must not change the result.
+  for (int i = 0; i < 50; ++i) planes.points.push_back(planes.points[static_cast<std::size_t>(7 * i)]);
+  return LoamMap(edges, planes);
+}
+
+bool same_factors(const std::vector<LoamCorrespondence>& a, const std::vector<LoamCorrespondence>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (a[i].kind != b[i].kind || a[i].p != b[i].p || a[i].a != b[i].a || a[i].dir != b[i].dir ||
+        a[i].weight != b[i].weight) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// The cached association against a brute-force reference, the association without a cache: over
+// the rounds of a solve (the pose moving less each round), jumps, and a change of queries, every
+// round's correspondences are the same, bit for bit; small moves are answered from the cache.
+TEST(LoamAssociateMapTest, TheCacheGivesTheUncachedCorrespondences) {
+  Rng rng(11);
+  const LoamMap map = noisy_room(rng);
+  LoamFeatures cur;
+  for (int i = 0; i < 600; ++i) {
+    const Vector3f p(static_cast<float>(rng.uniform(-7.0, 7.0)), static_cast<float>(rng.uniform(-5.0, 5.0)),
+                     static_cast<float>(rng.uniform(-0.5, 3.5)));
+    (i % 3 == 0 ? cur.edges : i % 3 == 1 ? cur.planes : cur.plane_candidates).points.push_back(p);
+  }
+  cur.edge_candidates.points.push_back(Vector3f(6.0f, 4.0f, 1.0f));
+  for (int threads : {1, 3}) {
+    LoamSettings s;
+    s.threads = threads;
+    LoamMapCache cache;
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation() = Vector3d(0.3, -0.2, 0.05);
+    for (int round = 0; round < 12; ++round) {
+      // Steps that shrink like a converging solve's, with a jump of 0.5 m at round 6.
+      const double step = round == 6 ? 0.5 : 0.05 / (1 << (round % 6));
+      T.translation() += step * Vector3d(rng.normal(), rng.normal(), 0.2 * rng.normal());
+      T.rotate(Eigen::AngleAxisd(0.1 * step * rng.normal(), Vector3d::UnitZ()));
+      std::vector<LoamCorrespondence> plain, cached;
+      loam_associate_map(map, cur, T, s, plain);
+      loam_associate_map(map, cur, T, s, cached, &cache);
+      ASSERT_FALSE(plain.empty());
+      ASSERT_TRUE(same_factors(plain, cached)) << "round " << round << ", threads " << threads;
+    }
+    EXPECT_GT(cache.hits(), cache.searches() / 4) << threads;
+    // Other queries (a new cloud) start afresh.
+    LoamFeatures other = cur;
+    other.planes.points.resize(other.planes.size() / 2);
+    std::vector<LoamCorrespondence> plain, cached;
+    loam_associate_map(map, other, T, s, plain);
+    loam_associate_map(map, other, T, s, cached, &cache);
+    EXPECT_TRUE(same_factors(plain, cached));
+  }
+  // A lattice map and queries moved by exact binary fractions: many map points lie at exactly the
+  // same distance from a query, in an order only the tree's search knows. Still the same pairs.
+  {
+    PointCloud lattice_planes, lattice_edges;
+    for (int i = -12; i <= 12; ++i) {
+      for (int j = -12; j <= 12; ++j) {
+        lattice_planes.points.emplace_back(0.25f * static_cast<float>(i), 0.25f * static_cast<float>(j), 0.0f);
+        lattice_planes.points.emplace_back(0.25f * static_cast<float>(i), 3.0f, 0.25f * static_cast<float>(j + 12));
+      }
+      lattice_edges.points.emplace_back(3.0f, 3.0f, 0.25f * static_cast<float>(i + 12));
+    }
+    const LoamMap lattice(lattice_edges, lattice_planes);
+    LoamFeatures q;
+    for (int i = 0; i < 200; ++i) {
+      const Vector3f p(0.125f * static_cast<float>(i % 40 - 20), 0.125f * static_cast<float>(i % 23 - 11) + 0.5f,
+                       0.125f * static_cast<float>(i % 3));
+      (i % 4 == 0 ? q.edges : q.planes).points.push_back(p);
+    }
+    LoamSettings s;
+    LoamMapCache cache;
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    for (int round = 0; round < 8; ++round) {
+      T.translation() += Vector3d(1.0 / 64, round % 2 == 0 ? 1.0 / 128 : 0.0, 0.0);
+      std::vector<LoamCorrespondence> plain, cached;
+      loam_associate_map(lattice, q, T, s, plain);
+      loam_associate_map(lattice, q, T, s, cached, &cache);
+      ASSERT_FALSE(plain.empty());
+      ASSERT_TRUE(same_factors(plain, cached)) << "lattice, round " << round;
+    }
+    EXPECT_GT(cache.hits(), 0u);
+  }
+  // map_neighbors beyond what the cache holds: searched every time, the same result.
+  LoamSettings wide;
+  wide.map_neighbors = 20;
+  LoamMapCache cache;
+  std::vector<LoamCorrespondence> plain, cached;
+  loam_associate_map(map, cur, Eigen::Isometry3d::Identity(), wide, plain);
+  loam_associate_map(map, cur, Eigen::Isometry3d::Identity(), wide, cached, &cache);
+  EXPECT_TRUE(same_factors(plain, cached));
+  EXPECT_EQ(cache.hits() + cache.searches(), 0u);
+}
+
 }  // namespace
 }  // namespace plumb

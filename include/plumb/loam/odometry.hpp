@@ -7,6 +7,7 @@
 /// switch (Zhou et al. 2021, sec. 3.1, eq. 20), all solved by one small Levenberg-Marquardt loop on SE(3).
 
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <vector>
 
@@ -153,6 +154,58 @@ LoamResult loam_scan_to_map(const LoamMap& map, const LoamFeatures& cur,
 /// @note Deterministic; const on the map, so several threads may associate against one map.
 void loam_associate_map(const LoamMap& map, const LoamFeatures& cur, const Eigen::Isometry3d& T_map_cur,
                         const LoamSettings& settings, std::vector<LoamCorrespondence>& out);
+
+/// @brief What loam_associate_map() keeps between the rounds of one solve (one map, one frame's
+///        features, a pose that moves a little each round), so that a round costs less than the first.
+///
+/// For each query it holds the few nearest map points of the last kd-tree search (more than
+/// map_neighbors) with the radius that search covered, and the correspondence last made. A later
+/// round checks whether the moved query's map_neighbors nearest points must be among those: when
+/// every point beyond the radius is provably farther than the k-th of them (the query moved by
+/// less than the margin), they are, and no tree search is made; when they are the same points as
+/// last time, the correspondence is the same too and is reused. Otherwise the tree is searched.
+/// The correspondences are those of the call without a cache (two different map points at
+/// exactly the same float distance from a query may be taken in another order).
+/// The cache follows the map and the query clouds it was filled for: another map, or other query
+/// clouds, and it starts afresh. Not thread-safe: one cache per solve.
+class LoamMapCache {
+ public:
+  /// @brief Forget everything (a new frame or a new map).
+  void clear() { slots_.clear(); }
+  /// @brief Queries answered from the cache / by a tree search since the last clear() (statistics).
+  std::size_t hits() const;
+  std::size_t searches() const;
+
+  /// One query's memory (implementation detail of loam_associate_map()).
+  struct Entry {
+    Vector3f at = Vector3f::Zero();  ///< where the query was when the tree was last searched
+    float radius_sq = -1.0f;         ///< every map point not in `near` is at least this far from `at`; < 0: none
+    std::uint8_t num_near = 0;
+    std::uint8_t num_used = 0;       ///< neighbours of the last correspondence (0: none made)
+    bool has_factor = false;
+    std::uint32_t near[16];          ///< map points nearest `at`, ascending by distance
+    std::uint32_t used[16];          ///< the neighbours the last correspondence was fitted to
+    LoamCorrespondence factor;       ///< the last correspondence, when has_factor
+  };
+  /// One query cloud's entries against one tree (implementation detail).
+  struct Slot {
+    const void* queries = nullptr;
+    const void* tree = nullptr;
+    std::size_t size = 0;
+    std::vector<Entry> entries;
+    std::size_t hits = 0, searches = 0;
+  };
+  /// @brief The slot for `queries` against `tree`, made afresh when it held another pair.
+  Slot& slot(std::size_t i, const void* queries, const void* tree, std::size_t size);
+
+ private:
+  std::vector<Slot> slots_;
+};
+
+/// @brief loam_associate_map() that remembers its neighbours in `cache` between the rounds of one
+///        solve (see LoamMapCache); the same correspondences.
+void loam_associate_map(const LoamMap& map, const LoamFeatures& cur, const Eigen::Isometry3d& T_map_cur,
+                        const LoamSettings& settings, std::vector<LoamCorrespondence>& out, LoamMapCache* cache);
 
 /// @brief The association step of loam_icp_scan_to_scan() on its own: each finite point of `cur`
 ///        transformed by `T_target_cur` paired with its nearest target point within

@@ -308,7 +308,7 @@ class HybridLio {
   void extract(Frame& f, const PointCloud& frame_lidar) const;
   /// 3. Map pairs for the LiDAR mode `m` at state x (the search structures are rebuilt when stale);
   ///    returns the matched query points.
-  std::size_t associate(const Frame& f, LioFrameMode m, const ImuState& x, std::vector<LoamCorrespondence>& corr);
+  std::size_t associate(Frame& f, LioFrameMode m, const ImuState& x, std::vector<LoamCorrespondence>& corr);
   /// 3'. The association of one solver round, with the hybrid switch and the fall-backs.
   void associate_round(Frame& f, int iteration);
   /// 4. The joint IMU + LiDAR problem solved by Levenberg-Marquardt.
