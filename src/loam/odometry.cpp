@@ -337,7 +337,7 @@ bool nearest_from_cache(const LoamMapCache::Entry& e, const Vector3f& q, std::si
   if (!(reach > 0.0)) return false;
   const double beyond_sq = reach * reach * (1.0 - 1e-4);
   found = 0;
-  float all[16];
+  float all[16] = {};
   for (std::size_t j = 0; j < e.num_near; ++j) {
     const Vector3f& p = features.points[e.near[j]];
     // Summed as the kd-tree sums (dimension order, float): the same distances.

@@ -183,8 +183,8 @@ class LoamMapCache {
     std::uint8_t num_near = 0;
     std::uint8_t num_used = 0;       ///< neighbours of the last correspondence (0: none made)
     bool has_factor = false;
-    std::uint32_t near[16];          ///< map points nearest `at`, ascending by distance
-    std::uint32_t used[16];          ///< the neighbours the last correspondence was fitted to
+    std::uint32_t near[16] = {};     ///< map points nearest `at`, ascending by distance
+    std::uint32_t used[16] = {};     ///< the neighbours the last correspondence was fitted to
     LoamCorrespondence factor;       ///< the last correspondence, when has_factor
   };
   /// One query cloud's entries against one tree (implementation detail).
