@@ -15,6 +15,7 @@
 #include "plumb/core/lie.hpp"
 #include "plumb/loam/ground.hpp"
 #include "plumb/loam/odometry.hpp"
+#include "plumb/core/parallel.hpp"
 #include "plumb/search/kdtree.hpp"
 
 #include "lio_problem.hpp"
@@ -242,6 +243,10 @@ void HybridLio::deskew(PointCloud& cloud, double stamp, const ImuState& x, bool 
   res.deskewed = true;
 }
 
+void HybridLio::settle_maps() const {
+  if (map_update_.valid()) map_update_.get();
+}
+
 void HybridLio::update_maps(const LoamFeatures& f, const PointCloud& cloud, const Eigen::Isometry3d& T_world_lidar) {
   const Eigen::Matrix3f R = T_world_lidar.linear().cast<float>();
   const Eigen::Vector3f t = T_world_lidar.translation().cast<float>();
@@ -460,6 +465,7 @@ std::size_t HybridLio::associate(Frame& f, LioFrameMode m, const ImuState& x,
            num_frames_ - frame >= static_cast<std::size_t>(set.map.map_rebuild_frames);
   };
   corr.clear();
+  settle_maps();
   const LoamSettings ls = map_association_settings(set);
   const Eigen::Isometry3d T_world_lidar = pose_of(x) * T_imu_lidar_;
   const bool loam_in_icp = set.solver.icp_keep_loam || set.solver.icp_ground_planes;
@@ -626,7 +632,13 @@ void HybridLio::conclude(Frame& f) {
   remember_pose(f.stamp);
   last_stamp_ = f.stamp;
   ++num_frames_;
-  if (f.lidar_ok) update_maps(f.feats, f.icp_points, pose_of(state_) * T_imu_lidar_);
+  if (f.lidar_ok) {
+    // Needed next by the next frame's association: with threads, made beside that frame's
+    // prediction and feature extraction. The frame's features are not used after this.
+    settle_maps();
+    map_update_ = start_beside(settings_.threads, [this, feats = std::move(f.feats), points = std::move(f.icp_points),
+                                                   T = pose_of(state_) * T_imu_lidar_] { update_maps(feats, points, T); });
+  }
 
   // Keep the IMU buffer bounded: samples older than a second before this frame are not needed.
   if (imu_.size() > 4096) {

@@ -18,6 +18,7 @@
 #include <cstddef>
 #include <functional>
 #include <future>
+#include <memory>
 #include <system_error>
 #include <type_traits>
 #include <utility>
@@ -90,14 +91,16 @@ void parallel_for(int threads, std::size_t n, std::size_t grain, F&& f) {
 /// future of a started f() waits for it when destroyed.
 template <class F>
 auto start_beside(int threads, F f) -> std::future<std::invoke_result_t<F&>> {
+  // Held once, so that what f carries is neither copied for the thread nor lost if none starts.
+  auto call = [held = std::make_shared<F>(std::move(f))] { return (*held)(); };
   if (threads != 1) {
     try {
-      return std::async(std::launch::async, f);
+      return std::async(std::launch::async, call);
     } catch (const std::system_error&) {
       // no thread to be had: deferred to the caller's get()
     }
   }
-  return std::async(std::launch::deferred, std::move(f));
+  return std::async(std::launch::deferred, std::move(call));
 }
 
 /// @brief A pipeline stage: items 0, 1, 2, ... made by `make(i)` one ahead of their consumer, on a

@@ -21,6 +21,7 @@
 
 #include <cstddef>
 #include <deque>
+#include <future>
 #include <memory>
 #include <optional>
 #include <string>
@@ -274,6 +275,9 @@ class HybridLio {
   /// @throws plumb::Error on bad settings (non-finite pose, non-positive sigmas...).
   explicit HybridLio(const Eigen::Isometry3d& T_world_base0 = Eigen::Isometry3d::Identity(),
                      const HybridLioSettings& settings = {});
+  // A map update may be running on a second thread with a pointer to this object.
+  HybridLio(const HybridLio&) = delete;
+  HybridLio& operator=(const HybridLio&) = delete;
 
   /// @brief Buffer one IMU sample (IMU frame).
   /// @return kOk; kInvalidInput when the sample is not finite or its stamp does not increase (dropped).
@@ -292,9 +296,21 @@ class HybridLio {
   std::size_t num_frames() const { return num_frames_; }          ///< frames processed (not skipped)
   bool initialized() const { return initialized_; }               ///< a frame has started the map
   std::size_t num_imu_dropped() const { return num_imu_dropped_; }  ///< samples add_imu() rejected
-  const VoxelHashMap& edge_map() const { return edge_map_; }      ///< @brief Local LOAM edge map.
-  const VoxelHashMap& plane_map() const { return plane_map_; }    ///< @brief Local LOAM plane map.
-  const VoxelHashMap& point_map() const { return point_map_; }    ///< @brief Local ICP point map.
+  /// @brief Local LOAM edge map (with the last frame's points: a pending update is completed first).
+  const VoxelHashMap& edge_map() const {
+    settle_maps();
+    return edge_map_;
+  }
+  /// @brief Local LOAM plane map (as edge_map()).
+  const VoxelHashMap& plane_map() const {
+    settle_maps();
+    return plane_map_;
+  }
+  /// @brief Local ICP point map (as edge_map()).
+  const VoxelHashMap& point_map() const {
+    settle_maps();
+    return point_map_;
+  }
 
  private:
   /// One frame on its way through process(): the prediction, the frame's features and queries,
@@ -323,6 +339,8 @@ class HybridLio {
   void deskew(PointCloud& cloud, double stamp, const ImuState& at_stamp, bool use_imu, LioFrameResult& res) const;
   bool imu_covers(double t0, double t1) const;
   void update_maps(const LoamFeatures& f, const PointCloud& cloud, const Eigen::Isometry3d& T_world_lidar);
+  /// Completes the pending map update (see map_update_); rethrows its exception.
+  void settle_maps() const;
   void reset_prior();
 
   HybridLioSettings settings_;
@@ -339,6 +357,10 @@ class HybridLio {
   std::size_t num_frames_ = 0;
   std::size_t num_imu_dropped_ = 0;
   VoxelHashMap edge_map_, plane_map_, point_map_;
+  /// The last frame's map update: with threads != 1 it runs beside the next frame's prediction and
+  /// feature extraction, which never read the maps; settle_maps() waits for it (or, on one thread,
+  /// runs it) before anything does. The maps are then those of the serial order.
+  mutable std::future<void> map_update_;
   // Search structures over the maps, rebuilt as map_rebuild_* say.
   std::optional<LoamMap> loam_tree_;
   PointCloud point_cloud_;
