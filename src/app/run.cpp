@@ -121,20 +121,39 @@ void track_frames(const io::FrameDumpReader& dump, const bim::BimMesh& mesh, con
   const std::size_t n = report.frames_requested;
   BimOdometrySettings os = settings.odometry;
   os.T_base_lidar = dump.meta().T_base_lidar;
+  // With threads, two of them prepare and match the next frames (below) all the time; the
+  // odometry's own parallel work (the registration's search) gets the others, if any.
+  const bool pipelined = settings.odometry.threads != 1;
+  if (pipelined) os.threads = std::max(1, resolve_thread_count(settings.odometry.threads) - 2);
   BimOdometry odometry(std::move(bim_cloud), report.T_world_base0, os);
   const Pose2 odom0 = odom.at(dump.stamp(0));
   const auto t_frames = std::chrono::steady_clock::now();
-  // Reading and deskewing frame i + 1 overlaps the odometry's work on frame i (with threads != 1).
-  Prefetch<PointCloud> frames(settings.odometry.threads, n, [&](std::size_t i) {
-    return (i == 0 && first_frame) ? std::move(*first_frame) : frame_at(i);
+  // A pipeline of three stages (with threads != 1): reading and deskewing frame i + 2, its cut to a
+  // planar scan and the front end's match; the key points of frame i + 1 (they depend on the frame
+  // alone); the BIM correction of frame i. Each stage sees the frames in order: the results of a
+  // serial loop.
+  struct Matched {
+    PointCloud frame;
+    BimFrameInput input;
+  };
+  Prefetch<Matched> matched(settings.odometry.threads, n, [&](std::size_t i) {
+    Matched m;
+    m.frame = (i == 0 && first_frame) ? std::move(*first_frame) : frame_at(i);
+    m.input = odometry.prepare_scan(m.frame, dump.stamp(i), i);
+    odometry.front_end(m.input, odom.at(dump.stamp(i)));
+    return m;
+  });
+  Prefetch<BimFrameInput> frames(settings.odometry.threads, n, [&](std::size_t i) {
+    Matched m = matched.get(i);
+    odometry.add_key_points(m.input, m.frame);
+    return std::move(m.input);
   });
   for (std::size_t i = 0; i < n; ++i) {
     const double stamp = dump.stamp(i);
     const Pose2 o = odom.at(stamp);
     BimFrameResult r;
     try {
-      PointCloud frame = frames.get(i);
-      r = odometry.process(frame, stamp, o);
+      r = odometry.process(frames.get(i), o);
     } catch (const std::exception& e) {
       // What was computed so far is kept: the caller writes it marked partial.
       if (report.frames.empty()) throw;

@@ -71,11 +71,7 @@ BimOdometry::BimOdometry(std::shared_ptr<const PointCloud> bim_cloud, const Eige
   }
 }
 
-BimFrameResult BimOdometry::process(const PointCloud& lidar_frame, double stamp, const Pose2& odom_pose) {
-  const auto t0 = std::chrono::steady_clock::now();
-  BimFrameResult out;
-  out.stamp = stamp;
-
+CloudToScanResult BimOdometry::planar_scan(const PointCloud& lidar_frame, double stamp) const {
   // Liu et al. 2022, sec. 2.1: the planar scan in the base frame, from a band around the LiDAR's height.
   CloudToScanSettings cs;
   const double h = settings_.T_base_lidar.translation().z();
@@ -86,46 +82,124 @@ BimFrameResult BimOdometry::process(const PointCloud& lidar_frame, double stamp,
   cs.range_max = settings_.scan_range_max;
   cs.T_target_sensor = settings_.T_base_lidar;
   cs.stamp = stamp;
-  const CloudToScanResult scan = cloud_to_scan(lidar_frame, cs);
-  out.scan_status = scan.status;
+  return cloud_to_scan(lidar_frame, cs);
+}
 
+BimFrameInput BimOdometry::prepare(const PointCloud& lidar_frame, double stamp, std::size_t frame_number) const {
+  BimFrameInput in = prepare_scan(lidar_frame, stamp, frame_number);
+  add_key_points(in, lidar_frame);
+  return in;
+}
+
+BimFrameInput BimOdometry::prepare_scan(const PointCloud& lidar_frame, double stamp, std::size_t frame_number) const {
+  BimFrameInput in;
+  in.stamp = stamp;
+  in.frame_number = frame_number;
+  const auto t0 = std::chrono::steady_clock::now();
+  in.scan = planar_scan(lidar_frame, stamp);
+  in.seconds_scan = seconds_since(t0);
+  return in;
+}
+
+void BimOdometry::add_key_points(BimFrameInput& input, const PointCloud& lidar_frame) const {
+  if (!corrects(input.frame_number)) return;
+  const auto t0 = std::chrono::steady_clock::now();
+  input.key_points = key_points(lidar_frame);
+  input.seconds_segment = seconds_since(t0);
+}
+
+BimFrameResult BimOdometry::process(const PointCloud& lidar_frame, double stamp, const Pose2& odom_pose) {
+  const auto t0 = std::chrono::steady_clock::now();
+  BimFrameInput in;
+  in.stamp = stamp;
+  in.frame_number = frame_index_;
   // The key points depend on the frame alone: with threads, they are found on a second thread while
   // the front end matches the scan (the same points either way).
-  const bool correcting = settings_.use_bim && frame_index_ % settings_.correct_every == 0;
-  auto find_keys = [this, &lidar_frame] {
-    const auto t = std::chrono::steady_clock::now();
-    PointCloud keys = key_points(lidar_frame);
-    return std::make_pair(std::move(keys), seconds_since(t));
-  };
   std::future<std::pair<PointCloud, double>> keys;
-  if (correcting) keys = start_beside(settings_.threads, find_keys);
+  if (corrects(frame_index_)) {
+    keys = start_beside(settings_.threads, [this, &lidar_frame] {
+      const auto t = std::chrono::steady_clock::now();
+      PointCloud points = key_points(lidar_frame);
+      return std::make_pair(std::move(points), seconds_since(t));
+    });
+  }
+  in.scan = planar_scan(lidar_frame, stamp);
+  in.seconds_scan = seconds_since(t0);
+  const BimFrontStep front = match(in, odom_pose);
+  BimFrameResult out = compose(in, front, keys.valid() ? &keys : nullptr);
+  out.seconds_total = seconds_since(t0);
+  return out;
+}
 
-  // Front end: PLICP against the local map, wheel-odometry prior, fallback to the prior.
-  const ScanOdometryStep step = front_end_.add(scan.scan, odom_pose);
-  out.mode = step.mode;
-  if (frame_index_ > 0) {
+void BimOdometry::front_end(BimFrameInput& input, const Pose2& odom_pose) {
+  PLUMB_CHECK(!input.front, "BimOdometry: frame " << input.frame_number << " has been matched already");
+  input.front = match(input, odom_pose);
+}
+
+BimFrameResult BimOdometry::process(const BimFrameInput& input, const Pose2& odom_pose) {
+  PLUMB_CHECK(input.frame_number == frame_index_, "BimOdometry: a frame prepared as frame number "
+                                                      << input.frame_number << " given as frame number " << frame_index_);
+  PLUMB_CHECK(input.key_points.has_value() || !corrects(frame_index_),
+              "BimOdometry: frame " << frame_index_ << " is corrected but was prepared without key points");
+  const auto t0 = std::chrono::steady_clock::now();
+  const BimFrontStep front = input.front ? *input.front : match(input, odom_pose);
+  BimFrameResult out = compose(input, front, nullptr);
+  out.seconds_total = seconds_since(t0) + input.seconds_scan + input.seconds_segment + (input.front ? front.seconds : 0.0);
+  return out;
+}
+
+BimFrontStep BimOdometry::match(const BimFrameInput& input, const Pose2& odom_pose) {
+  PLUMB_CHECK(input.frame_number == front_frames_, "BimOdometry: frame number " << input.frame_number
+                                                       << " matched after frame " << front_frames_ << " was due");
+  const auto t0 = std::chrono::steady_clock::now();
+  BimFrontStep front;
+  // PLICP against the local map, wheel-odometry prior, fallback to the prior.
+  const ScanOdometryStep step = front_end_.add(input.scan.scan, odom_pose);
+  front.mode = step.mode;
+  if (front_frames_ > 0) {
     const Pose2 rel = last_front_pose_.ominus().oplus(step.T_world_base);
     const bool matched = step.mode == ScanMatchMode::kMatched || step.mode == ScanMatchMode::kDegenerate;
     const Pose2 wheel = last_odom_pose_.ominus().oplus(odom_pose);
     const Matrix3d c = front_end_step_covariance(settings_, rel, wheel, matched, step.match.covariance);
-    composer_.add_motion(rel.to_isometry(), planar_covariance(c, 1e-8, 1e-8));
+    front.has_motion = true;
+    front.motion = rel.to_isometry();
+    front.motion_covariance = planar_covariance(c, 1e-8, 1e-8);
   }
   last_front_pose_ = step.T_world_base;
   last_odom_pose_ = odom_pose;
-  out.seconds_front_end = seconds_since(t0);
   // The uncorrected chain: the front end's motion since the first frame, from the initial pose.
-  if (frame_index_ == 0) first_front_pose_ = step.T_world_base;
-  out.T_world_base_uncorrected = T_world_base0_ * first_front_pose_.ominus().oplus(step.T_world_base).to_isometry();
+  if (front_frames_ == 0) first_front_pose_ = step.T_world_base;
+  front.T_world_base_uncorrected =
+      T_world_base0_ * first_front_pose_.ominus().oplus(step.T_world_base).to_isometry();
+  ++front_frames_;
+  front.seconds = seconds_since(t0);
+  return front;
+}
 
-  if (correcting) {
-    auto [points, seconds] = keys.get();
-    out.num_key_points = points.size();
-    out.seconds_segment = seconds;
-    correct(points, out);
+BimFrameResult BimOdometry::compose(const BimFrameInput& input, const BimFrontStep& front,
+                                    std::future<std::pair<PointCloud, double>>* keys_beside) {
+  BimFrameResult out;
+  out.stamp = input.stamp;
+  out.scan_status = input.scan.status;
+  out.mode = front.mode;
+  if (front.has_motion) composer_.add_motion(front.motion, front.motion_covariance);
+  out.seconds_front_end = input.seconds_scan + front.seconds;
+  out.T_world_base_uncorrected = front.T_world_base_uncorrected;
+
+  if (corrects(frame_index_)) {
+    if (keys_beside != nullptr) {
+      auto [points, seconds] = keys_beside->get();
+      out.num_key_points = points.size();
+      out.seconds_segment = seconds;
+      correct(points, out);
+    } else {
+      out.num_key_points = input.key_points->size();
+      out.seconds_segment = input.seconds_segment;
+      correct(*input.key_points, out);
+    }
   }
   out.T_world_base = composer_.pose();
   ++frame_index_;
-  out.seconds_total = seconds_since(t0);
   return out;
 }
 

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <memory>
+#include <optional>
 #include <string>
 
 #include <unistd.h>
@@ -12,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "plumb/app/simulate.hpp"
+#include "plumb/bim/bim_cloud.hpp"
 #include "plumb/bim/ifc.hpp"
 #include "plumb/bim/mesh.hpp"
 #include "plumb/io/frame_dump.hpp"
@@ -104,6 +107,81 @@ TEST_F(BimOdometryRunTest, ThreadsChangeNoFrameResult) {
       EXPECT_EQ(many.deviations[k].sigma_m, one.deviations[k].sigma_m) << one.deviations[k].global_id;
     }
   }
+}
+
+TEST_F(BimOdometryRunTest, APreparedFrameGivesTheResultOfTheWholeFrame) {
+  // prepare() on a second thread while process() runs is how plumb run overlaps frames; it must give
+  // what process() on the whole frame gives, on the corrected frames and on the ones between.
+  const plumb::io::FrameDumpReader dump(dir_);
+  const plumb::Trajectory gt = dump.ground_truth();
+  const auto bim = std::make_shared<const plumb::PointCloud>(plumb::bim::sample_bim_cloud(*mesh_, 0.05));
+  plumb::BimOdometrySettings s;
+  s.T_base_lidar = dump.meta().T_base_lidar;
+  s.correct_every = 2;
+  plumb::BimOdometry whole(bim, gt.poses.front(), s);
+  s.threads = 2;
+  plumb::BimOdometry prepared(bim, gt.poses.front(), s);
+  // The front end of the next frame runs before this frame's correction (as in plumb run's pipeline).
+  plumb::BimOdometry ahead(bim, gt.poses.front(), s);
+  const std::size_t n = std::min<std::size_t>(dump.num_frames(), 24);
+  auto odom = [&](std::size_t i) { return plumb::Pose2::from_isometry(gt.poses[i]); };
+  std::optional<plumb::BimFrameInput> next = ahead.prepare(dump.frame(0), dump.stamp(0), 0);
+  ahead.front_end(*next, odom(0));
+  std::size_t corrected = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const plumb::PointCloud frame = dump.frame(i);
+    const plumb::BimFrameResult a = whole.process(frame, dump.stamp(i), odom(i));
+    const plumb::BimFrameInput in = prepared.prepare(frame, dump.stamp(i), i);
+    ASSERT_EQ(in.key_points.has_value(), i % 2 == 0) << i;
+    const plumb::BimFrameResult b = prepared.process(in, odom(i));
+    const plumb::BimFrameInput current = std::move(*next);
+    next.reset();
+    if (i + 1 < n) {
+      next = ahead.prepare(dump.frame(i + 1), dump.stamp(i + 1), i + 1);
+      ahead.front_end(*next, odom(i + 1));
+    }
+    const plumb::BimFrameResult c = ahead.process(current, plumb::Pose2{1e3, 1e3, 0.0});  // odom not used
+    for (const plumb::BimFrameResult* r : {&b, &c}) {
+      ASSERT_TRUE(a.T_world_base.matrix() == r->T_world_base.matrix()) << "frame " << i;
+      ASSERT_TRUE(a.T_world_base_uncorrected.matrix() == r->T_world_base_uncorrected.matrix()) << i;
+      ASSERT_EQ(a.mode, r->mode) << i;
+      ASSERT_EQ(a.anchor_attempted, r->anchor_attempted) << i;
+      ASSERT_EQ(a.num_key_points, r->num_key_points) << i;
+      ASSERT_EQ(a.icp_inliers, r->icp_inliers) << i;
+      ASSERT_EQ(a.anchor.decision, r->anchor.decision) << i;
+    }
+    corrected += b.anchor.decision == plumb::AnchorDecision::kAccepted ? 1 : 0;
+  }
+  EXPECT_GT(corrected, n / 4);
+  EXPECT_EQ(prepared.num_frames(), n);
+  EXPECT_EQ(ahead.num_frames(), n);
+}
+
+TEST_F(BimOdometryRunTest, AFramePreparedForAnotherPlaceIsRefused) {
+  const plumb::io::FrameDumpReader dump(dir_);
+  const auto bim = std::make_shared<const plumb::PointCloud>(plumb::bim::sample_bim_cloud(*mesh_, 0.05));
+  plumb::BimOdometrySettings s;
+  s.T_base_lidar = dump.meta().T_base_lidar;
+  plumb::BimOdometry odometry(bim, dump.ground_truth().poses.front(), s);
+  const plumb::Pose2 odom;
+  // Prepared as the second frame but given first: its key points would be missing or misplaced.
+  EXPECT_THROW(odometry.process(odometry.prepare(dump.frame(1), dump.stamp(1), 1), odom), plumb::Error);
+  EXPECT_EQ(odometry.num_frames(), 0u);
+  // A frame prepared without its key points cannot be corrected.
+  plumb::BimFrameInput in = odometry.prepare(dump.frame(0), dump.stamp(0), 0);
+  in.key_points.reset();
+  EXPECT_THROW(odometry.process(in, odom), plumb::Error);
+  in.key_points = odometry.prepare(dump.frame(0), dump.stamp(0), 0).key_points;
+  EXPECT_NO_THROW(odometry.process(in, odom));
+  EXPECT_EQ(odometry.num_frames(), 1u);
+  // The front end takes frames in order, each once.
+  plumb::BimFrameInput third = odometry.prepare(dump.frame(2), dump.stamp(2), 2);
+  EXPECT_THROW(odometry.front_end(third, odom), plumb::Error);
+  plumb::BimFrameInput second = odometry.prepare(dump.frame(1), dump.stamp(1), 1);
+  EXPECT_NO_THROW(odometry.front_end(second, odom));
+  EXPECT_THROW(odometry.front_end(second, odom), plumb::Error);
+  EXPECT_NO_THROW(odometry.process(second, odom));
+  EXPECT_EQ(odometry.num_frames(), 2u);
 }
 
 TEST_F(BimOdometryRunTest, BimCorrectionRemovesAnOffsetTheFrontEndKeeps) {

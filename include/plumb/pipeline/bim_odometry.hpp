@@ -15,7 +15,10 @@
 /// as `M ← M_e · M` (Liu et al. 2022, sec. 3.3, loop step (5)) through its Mahalanobis gate.
 
 #include <cstddef>
+#include <future>
 #include <memory>
+#include <optional>
+#include <utility>
 
 #include <Eigen/Geometry>
 
@@ -137,12 +140,41 @@ struct BimFrameResult {
   AnchorResult anchor;                  ///< the composer's decision (kIgnored when no anchor was made)
   std::size_t as_built_pairs = 0;       ///< key-point pairs the as-built estimate took (estimate_as_built)
   /// Time of the front end, of finding the key points and of their registration, and of the whole
-  /// frame [s]. With threads != 1 the key points are found while the front end runs, so the parts
-  /// may add up to more than the whole.
+  /// frame [s] (the cut to a planar scan counts in the front end). With threads != 1 the key points
+  /// are found while the front end runs, so the parts may add up to more than the whole. For a
+  /// prepared frame, the cut and the key points are timed by prepare() and the whole is the time of
+  /// prepare() and process() together.
   double seconds_front_end = 0.0, seconds_segment = 0.0, seconds_icp = 0.0, seconds_total = 0.0;
 };
 
-/// @brief The BIM-corrected odometry (see the file comment). Not thread-safe; deterministic.
+/// @brief The front end's step on one frame (BimOdometry::front_end()).
+struct BimFrontStep {
+  ScanMatchMode mode = ScanMatchMode::kInitial;
+  bool has_motion = false;  ///< false on the first frame
+  Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();  ///< base motion since the previous frame
+  Matrix6d motion_covariance = Matrix6d::Zero();              ///< its covariance (composer convention)
+  Eigen::Isometry3d T_world_base_uncorrected = Eigen::Isometry3d::Identity();
+  double seconds = 0.0;  ///< time of the match [s]
+};
+
+/// @brief What BimOdometry takes from a frame before its BIM correction: its planar scan and, for a
+/// frame that is BIM-corrected, its key points, which depend on the frame alone
+/// (BimOdometry::prepare()); then, optionally, the front end's step (BimOdometry::front_end()).
+/// A reader can so prepare frame i + 2 and match frame i + 1 on other threads while frame i is
+/// corrected.
+struct BimFrameInput {
+  double stamp = 0.0;
+  std::size_t frame_number = 0;        ///< the frame's place in the sequence (0 = the first processed)
+  CloudToScanResult scan;              ///< the 3D-to-2D cut (Liu et al. 2022, sec. 2.1)
+  std::optional<PointCloud> key_points;  ///< set when the frame is corrected (BimOdometry::corrects())
+  double seconds_scan = 0.0, seconds_segment = 0.0;  ///< time of the cut and of the key points [s]
+  std::optional<BimFrontStep> front;   ///< set by BimOdometry::front_end()
+};
+
+/// @brief The BIM-corrected odometry (see the file comment). Deterministic. Not thread-safe, except
+/// that its three stages may each run on its own thread: prepare() (const), front_end() (only the
+/// front end's state) and process(), each called in frame order, front_end() of a frame before its
+/// process().
 class BimOdometry {
  public:
   /// @param bim_cloud the BIM cloud with normals (bim::sample_surface of the relevant storey), world frame
@@ -155,6 +187,28 @@ class BimOdometry {
   ///        needed), its stamp and the wheel-odometry pose of the base at that stamp (any fixed frame).
   BimFrameResult process(const PointCloud& lidar_frame, double stamp, const Pose2& odom_pose);
 
+  /// @brief The part of process() that depends on the frame alone, for frame number `frame_number`
+  ///        (0 = the first processed). Const, and safe to call on another thread while process() runs.
+  BimFrameInput prepare(const PointCloud& lidar_frame, double stamp, std::size_t frame_number) const;
+  /// @brief prepare() in two steps: the planar scan alone, then (for a corrected frame) the key points
+  ///        of the same frame; both const, as prepare().
+  BimFrameInput prepare_scan(const PointCloud& lidar_frame, double stamp, std::size_t frame_number) const;
+  void add_key_points(BimFrameInput& input, const PointCloud& lidar_frame) const;
+  /// @brief The front end's match of a prepared frame (PLICP against the local map, seeded by the
+  ///        wheel-odometry pose `odom_pose`), into `input.front`.
+  /// @throws plumb::Error when `input` is not the frame after the one last matched, or already matched.
+  void front_end(BimFrameInput& input, const Pose2& odom_pose);
+  /// @brief Process a prepared frame: the same result as process() on the frame it was prepared from.
+  ///        Runs the front end first unless front_end() did (`odom_pose` is then not used).
+  /// @throws plumb::Error when `input` was prepared for another frame number than num_frames().
+  BimFrameResult process(const BimFrameInput& input, const Pose2& odom_pose);
+
+  /// @brief Whether frame number `frame_number` is registered to the BIM (needs key points).
+  bool corrects(std::size_t frame_number) const {
+    return settings_.use_bim && frame_number % settings_.correct_every == 0;
+  }
+  std::size_t num_frames() const { return frame_index_; }  ///< frames processed so far
+
   const Eigen::Isometry3d& pose() const { return composer_.pose(); }
   const PoseComposer& composer() const { return composer_; }
   const BimOdometrySettings& settings() const { return settings_; }
@@ -164,6 +218,14 @@ class BimOdometry {
  private:
   /// The frame's ground and vertical-plane key points, thinned (a function of the frame alone).
   PointCloud key_points(const PointCloud& lidar_frame) const;
+  /// The frame's planar scan in the base frame.
+  CloudToScanResult planar_scan(const PointCloud& lidar_frame, double stamp) const;
+  /// The front end's step on the frame (checks its number).
+  BimFrontStep match(const BimFrameInput& input, const Pose2& odom_pose);
+  /// process() after the front end: the motion into the composer, then the registration of the key
+  /// points, which `input.key_points` holds or `keys_beside` is finding.
+  BimFrameResult compose(const BimFrameInput& input, const BimFrontStep& front,
+                         std::future<std::pair<PointCloud, double>>* keys_beside);
   /// Registers the key points; fills the anchor fields of `out`.
   void correct(const PointCloud& keys, BimFrameResult& out);
   /// The accepted anchor's pairs into the as-built estimate; every as_built_refresh_every anchors,
@@ -181,7 +243,8 @@ class BimOdometry {
   Pose2 first_front_pose_;
   Pose2 last_front_pose_;
   Pose2 last_odom_pose_;
-  std::size_t frame_index_ = 0;
+  std::size_t front_frames_ = 0;  ///< frames the front end has matched
+  std::size_t frame_index_ = 0;   ///< frames processed
 };
 
 }  // namespace plumb
