@@ -8,11 +8,16 @@
 #include <utility>
 
 #include "plumb/core/error.hpp"
+#include "plumb/core/parallel.hpp"
 #include "plumb/search/kdtree.hpp"
 
 #include "features/fpfh_detail.hpp"
 
 namespace plumb {
+
+namespace {
+constexpr std::size_t kSignatureGrain = 512;  // signatures per chunk
+}  // namespace
 
 namespace detail {
 
@@ -93,6 +98,7 @@ void check_fpfh_inputs(const PointCloud& cloud, const FpfhSettings& settings,
   PLUMB_CHECK(settings.radius > 0.0f && std::isfinite(settings.radius),
               "compute_fpfh: settings.radius = " << settings.radius << " must be > 0 and finite");
   PLUMB_CHECK(!std::isnan(settings.visible_side_tolerance), "compute_fpfh: settings.visible_side_tolerance is NaN");
+  PLUMB_CHECK(settings.threads >= 0, "compute_fpfh: settings.threads = " << settings.threads << " must be >= 0 (0 = every core)");
   PLUMB_CHECK(!cloud.empty(), "compute_fpfh: the cloud is empty");
   PLUMB_CHECK(cloud.has_normals(),
               "compute_fpfh: the cloud has no normals (compute_normals first)");
@@ -118,18 +124,24 @@ class FpfhNeighborhoods {
   FpfhNeighborhoods(const PointCloud& cloud, const FpfhSettings& settings, const std::vector<std::uint8_t>& usable)
       : row_of(cloud.size(), kNoRow), cloud_(cloud), settings_(settings), usable_(usable), tree_(cloud.points) {}
 
-  /// Rows for the usable `queries`, then for every neighbour in them.
+  /// Rows for the usable `queries`, then for every neighbour in them. The rows are numbered first
+  /// (in that order), then searched: in chunks of a fixed number of rows on settings.threads,
+  /// each chunk into its own buffers, appended in chunk order.
   void build(const std::vector<std::size_t>& queries) {
+    std::vector<std::uint32_t> points;
     for (std::size_t p : queries) {
-      if (usable_[p] && row_of[p] == kNoRow) add_row(p);
+      if (usable_[p] && row_of[p] == kNoRow) number_row(p, points);
     }
+    search_rows(points);
+    points.clear();
     const std::size_t num_query_rows = row_point.size();
     for (std::size_t r = 0; r < num_query_rows; ++r) {
       for (std::uint32_t e = rows.begin[r]; e < rows.begin[r + 1]; ++e) {
         const std::uint32_t q = rows.index[e];
-        if (row_of[q] == kNoRow) add_row(q);
+        if (row_of[q] == kNoRow) number_row(q, points);
       }
     }
+    search_rows(points);
   }
 
   std::vector<std::uint32_t> row_of;     ///< row of each cloud point, or kNoRow
@@ -138,25 +150,55 @@ class FpfhNeighborhoods {
   FpfhNeighborRows rows;
 
  private:
+  static constexpr std::size_t kRowGrain = 256;  // rows per chunk of searches
+
+  // The searches of a chunk of rows: each row's neighbour count, then all their entries.
+  struct RowChunk {
+    std::vector<std::uint32_t> count, index;
+    std::vector<float> dist_sq;
+    std::vector<std::uint8_t> capped;
+    std::vector<std::size_t> found_idx;  // scratch of the radius search
+    std::vector<float> found_d2;
+    std::vector<std::pair<float, std::uint32_t>> cand;
+  };
+
   const PointCloud& cloud_;
   const FpfhSettings& settings_;
   const std::vector<std::uint8_t>& usable_;
   const KdTree<3> tree_;
-  std::vector<std::size_t> found_idx_;
-  std::vector<float> found_d2_;
-  std::vector<std::pair<float, std::uint32_t>> cand_;
 
-  /// One radius search for point p; the row keeps its neighbours (self excluded, nearest
-  /// max_neighbors kept with self counted, as Open3D's hybrid search).
-  void add_row(std::size_t p) {
+  void number_row(std::size_t p, std::vector<std::uint32_t>& points) {
     row_of[p] = static_cast<std::uint32_t>(row_point.size());
     row_point.push_back(static_cast<std::uint32_t>(p));
-    const std::size_t m = tree_.radius(cloud_.points[p], settings_.radius, found_idx_, found_d2_, false);
-    cand_.clear();
+    points.push_back(static_cast<std::uint32_t>(p));
+  }
+
+  void search_rows(const std::vector<std::uint32_t>& points) {
+    const std::size_t chunks = chunk_count(points.size(), kRowGrain);
+    std::vector<RowChunk> parts(chunks);
+    parallel_chunks(settings_.threads, chunks, [&](std::size_t c) {
+      const std::size_t end = std::min(points.size(), (c + 1) * kRowGrain);
+      for (std::size_t i = c * kRowGrain; i < end; ++i) search_row(points[i], parts[c]);
+    });
+    for (RowChunk& part : parts) {
+      for (std::uint32_t count : part.count) rows.begin.push_back(rows.begin.back() + count);
+      rows.index.insert(rows.index.end(), part.index.begin(), part.index.end());
+      rows.dist_sq.insert(rows.dist_sq.end(), part.dist_sq.begin(), part.dist_sq.end());
+      row_capped.insert(row_capped.end(), part.capped.begin(), part.capped.end());
+      part = RowChunk();
+    }
+  }
+
+  /// One radius search for point p, its row into `out`: its neighbours (self excluded, nearest
+  /// max_neighbors kept with self counted, as Open3D's hybrid search).
+  void search_row(std::size_t p, RowChunk& out) const {
+    const std::size_t m = tree_.radius(cloud_.points[p], settings_.radius, out.found_idx, out.found_d2, false);
+    auto& cand = out.cand;
+    cand.clear();
     bool self_found = false;
     const bool visible_only = settings_.visible_side_tolerance >= 0.0f;
     for (std::size_t j = 0; j < m; ++j) {
-      const std::size_t q = found_idx_[j];
+      const std::size_t q = out.found_idx[j];
       if (q == p) {
         self_found = true;
         continue;
@@ -169,23 +211,22 @@ class FpfhNeighborhoods {
           continue;
         }
       }
-      cand_.emplace_back(found_d2_[j], static_cast<std::uint32_t>(q));
+      cand.emplace_back(out.found_d2[j], static_cast<std::uint32_t>(q));
     }
     // With the point itself counted, `cap` entries leave cap - 1 neighbours.
     const std::size_t cap = settings_.max_neighbors;
-    const std::size_t keep = (cap == 0) ? cand_.size() : std::min(cand_.size(), cap - (self_found ? 1 : 0));
-    row_capped.push_back(keep < cand_.size() ? 1 : 0);
-    if (keep < cand_.size()) {
-      std::nth_element(cand_.begin(), cand_.begin() + static_cast<std::ptrdiff_t>(keep), cand_.end());
-      cand_.resize(keep);
+    const std::size_t keep = (cap == 0) ? cand.size() : std::min(cand.size(), cap - (self_found ? 1 : 0));
+    out.capped.push_back(keep < cand.size() ? 1 : 0);
+    if (keep < cand.size()) {
+      std::nth_element(cand.begin(), cand.begin() + static_cast<std::ptrdiff_t>(keep), cand.end());
+      cand.resize(keep);
     }
-    for (const auto& c : cand_) {
-      rows.index.push_back(c.second);
-      rows.dist_sq.push_back(c.first);
+    for (const auto& c : cand) {
+      out.index.push_back(c.second);
+      out.dist_sq.push_back(c.first);
     }
-    rows.begin.push_back(static_cast<std::uint32_t>(rows.index.size()));
+    out.count.push_back(static_cast<std::uint32_t>(cand.size()));
   }
-
 };
 
 /// SPFH per row (Rusu 2009), kFpfhBins values a row, each sub-histogram normalised to 100: every
@@ -286,15 +327,22 @@ FpfhResult compute_fpfh(const PointCloud& cloud, const FpfhSettings& settings,
   nb.build(out.indices);
   const std::vector<float> spfh = detail::compute_spfh(cloud, nb);
 
-  // The FPFH of every query with neighbours.
-  for (std::size_t f = 0; f < out.indices.size(); ++f) {
+  // The FPFH of every query with neighbours (each writes only its own signature).
+  auto row_of_query = [&](std::size_t f) {
     const std::size_t p = out.indices[f];
     const std::uint32_t r = usable[p] ? nb.row_of[p] : detail::FpfhNeighborhoods::kNoRow;
-    if (r == detail::FpfhNeighborhoods::kNoRow || nb.rows.begin[r] == nb.rows.begin[r + 1]) {
-      ++out.num_invalid;
-      continue;
+    return (r == detail::FpfhNeighborhoods::kNoRow || nb.rows.begin[r] == nb.rows.begin[r + 1])
+               ? detail::FpfhNeighborhoods::kNoRow
+               : r;
+  };
+  parallel_for(settings.threads, out.indices.size(), kSignatureGrain, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t f = begin; f < end; ++f) {
+      const std::uint32_t r = row_of_query(f);
+      if (r != detail::FpfhNeighborhoods::kNoRow) detail::fpfh_signature(nb, spfh, r, out.features[f]);
     }
-    detail::fpfh_signature(nb, spfh, r, out.features[f]);
+  });
+  for (std::size_t f = 0; f < out.indices.size(); ++f) {
+    out.num_invalid += row_of_query(f) == detail::FpfhNeighborhoods::kNoRow ? 1 : 0;
   }
   return out;
 }

@@ -89,6 +89,7 @@ std::vector<FpfhSignature> localize_fpfh(const PointCloud& c, const LocalizeSett
   if (c.size() < 3) return std::vector<FpfhSignature>(c.size(), FpfhSignature{});
   FpfhSettings fs;
   fs.radius = static_cast<float>(s.fpfh_radius_factor * s.voxel_size);
+  fs.threads = s.threads;
   fs.max_neighbors = s.fpfh_max_neighbors;
   if (s.fpfh_visible_side_factor >= 0.0) fs.visible_side_tolerance = static_cast<float>(s.fpfh_visible_side_factor * s.voxel_size);
   return compute_fpfh(c, fs).features;

@@ -292,5 +292,47 @@ TEST(FpfhTest, Deterministic) {
   EXPECT_EQ(a.num_invalid, b.num_invalid);
 }
 
+TEST(FpfhTest, ThreadsChangeNoSignature) {
+  // Enough points for many chunks of searches and of signatures: three noisy walls of a corner
+  // with their normals, a few invalid points among them; all points, then a subset with repeats.
+  PointCloud cloud;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.0f, 2.0f), e(-0.01f, 0.01f);
+  for (int i = 0; i < 6000; ++i) {
+    const int wall = i % 3;
+    Vector3f p(u(rng), u(rng), u(rng));
+    p[wall] = e(rng);
+    Vector3f n = Vector3f::Zero();
+    n[wall] = 1.0f;
+    n += Vector3f(e(rng), e(rng), e(rng)) * 5.0f;
+    cloud.points.push_back(p);
+    cloud.normals.push_back(n.normalized());
+  }
+  cloud.points[17].x() = std::numeric_limits<float>::quiet_NaN();
+  cloud.normals[4000] = Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+  std::vector<std::size_t> keys;
+  for (std::size_t i = cloud.size(); i-- > 0;) {
+    if (i % 5 == 1) keys.push_back(i);
+  }
+  keys.push_back(keys[3]);
+  FpfhSettings s;
+  s.radius = 0.15f;
+  s.max_neighbors = 30;
+  const FpfhResult one = compute_fpfh(cloud, s);
+  const FpfhResult one_keys = compute_fpfh(cloud, s, &keys);
+  EXPECT_EQ(one.num_invalid, 2u);
+  for (const int threads : {2, 3, 8, 0}) {
+    s.threads = threads;
+    const FpfhResult many = compute_fpfh(cloud, s);
+    EXPECT_EQ(many.features, one.features) << threads;  // bit-identical
+    EXPECT_EQ(many.num_invalid, one.num_invalid) << threads;
+    const FpfhResult many_keys = compute_fpfh(cloud, s, &keys);
+    EXPECT_EQ(many_keys.features, one_keys.features) << threads;
+    EXPECT_EQ(many_keys.indices, keys) << threads;
+  }
+  s.threads = -1;
+  EXPECT_THROW(compute_fpfh(cloud, s), Error);
+}
+
 }  // namespace
 }  // namespace plumb

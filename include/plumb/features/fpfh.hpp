@@ -36,6 +36,9 @@ struct FpfhSettings {
   /// room's floor, still pass: that would need ray casting). Negative (default) = plain FPFH
   /// (Rusu 2009, Open3D, PCL).
   float visible_side_tolerance = -1.0f;
+  /// Threads (0 = every core) of the radius searches and of the signatures; the SPFH pass, which
+  /// shares each pair between its two points, stays on one. Results are bit-identical for any count.
+  int threads = 1;
 };
 
 /// @brief Descriptors of compute_fpfh().

@@ -74,7 +74,7 @@ struct LocalizeSettings {
   double ambiguity_angle = 0.35;        ///< see ambiguity_margin [rad] (20 deg)
   /// Viewpoint of the source's normals, in the source frame (the sensor) [m].
   Vector3f source_viewpoint = Vector3f::Zero();
-  /// Threads of the normals and the ICP stages (0 = every core; replaces `icp.threads`). Results
+  /// Threads of the normals, FPFH and ICP stages (0 = every core; replaces `icp.threads`). Results
   /// are bit-identical for any count (core/parallel.hpp).
   int threads = 1;
 };
