@@ -141,7 +141,8 @@ void bind_normals(py::module_& m) {
       .def_readwrite("k", &NormalSettings::k)
       .def_readwrite("radius", &NormalSettings::radius)
       .def_readwrite("viewpoint", &NormalSettings::viewpoint)
-      .def_readwrite("orient_to_viewpoint", &NormalSettings::orient_to_viewpoint);
+      .def_readwrite("orient_to_viewpoint", &NormalSettings::orient_to_viewpoint)
+      .def_readwrite("threads", &NormalSettings::threads);
   py::class_<NormalResult>(m, "NormalResult", "Per-point normals and surface variation.")
       .def_property_readonly("normals", [](const NormalResult& r) { return points_to_array(r.normals); })
       .def_property_readonly("curvature", [](const NormalResult& r) { return vector_to_array(r.curvature); })

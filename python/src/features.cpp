@@ -38,7 +38,8 @@ void bind_fpfh(py::module_& m) {
       .def(py::init<>())
       .def_readwrite("radius", &FpfhSettings::radius)
       .def_readwrite("max_neighbors", &FpfhSettings::max_neighbors)
-      .def_readwrite("visible_side_tolerance", &FpfhSettings::visible_side_tolerance);
+      .def_readwrite("visible_side_tolerance", &FpfhSettings::visible_side_tolerance)
+      .def_readwrite("threads", &FpfhSettings::threads);
   py::class_<FpfhResult>(m, "FpfhResult", "FPFH signatures: features (M, 33) float32, indices (M,) int64.")
       .def_property_readonly("features", [](const FpfhResult& r) { return signatures_to_array(r.features); })
       .def_property_readonly("indices", [](const FpfhResult& r) { return indices_to_array(r.indices); })
@@ -59,7 +60,7 @@ void bind_fpfh(py::module_& m) {
       },
       py::arg("cloud"), py::arg("indices") = py::none(),
       "Fast Point Feature Histograms (Rusu 2009) of every point of a PointCloud with normals, or of the points "
-      "`indices`. Keyword arguments: the fields of FpfhSettings (radius, max_neighbors, visible_side_tolerance).");
+      "`indices`. Keyword arguments: the fields of FpfhSettings (radius, max_neighbors, visible_side_tolerance, threads).");
 }
 
 void bind_sac_ia(py::module_& m) {

@@ -58,6 +58,7 @@ void bind_bim_odometry_types(py::module_& m) {
       .def_readwrite("correct_every", &BimOdometrySettings::correct_every)
       .def_readwrite("key_point_voxel", &BimOdometrySettings::key_point_voxel)
       .def_readwrite("icp", &BimOdometrySettings::icp)
+      .def_readwrite("threads", &BimOdometrySettings::threads)
       .def_readwrite("min_anchor_overlap", &BimOdometrySettings::min_anchor_overlap)
       .def_readwrite("min_anchor_inliers", &BimOdometrySettings::min_anchor_inliers)
       .def_readwrite("anchor_sigma", &BimOdometrySettings::anchor_sigma)
@@ -206,7 +207,8 @@ void bind_hybrid_lio(py::module_& m) {
   s.def(py::init<>())
       .def_readwrite("mode", &HybridLioSettings::mode)
       .def_readwrite("features", &HybridLioSettings::features)
-      .def_readwrite("motion", &HybridLioSettings::motion);
+      .def_readwrite("motion", &HybridLioSettings::motion)
+      .def_readwrite("threads", &HybridLioSettings::threads);
   def_pose(s, "T_base_lidar", &HybridLioSettings::T_base_lidar, true);
   def_pose(s, "T_base_imu", &HybridLioSettings::T_base_imu, true);
   py::class_<LioFrameResult> r(m, "LioFrameResult", "What HybridLio.process() did with one frame.");

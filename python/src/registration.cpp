@@ -36,7 +36,8 @@ void bind_icp_settings(py::module_& m) {
       .def_readwrite("kernel_scale", &IcpSettings::kernel_scale)
       .def_readwrite("min_correspondences", &IcpSettings::min_correspondences)
       .def_readwrite("degeneracy_threshold", &IcpSettings::degeneracy_threshold)
-      .def_readwrite("keep_correspondences", &IcpSettings::keep_correspondences);
+      .def_readwrite("keep_correspondences", &IcpSettings::keep_correspondences)
+      .def_readwrite("threads", &IcpSettings::threads);
 }
 
 void bind_icp_result(py::module_& m) {
