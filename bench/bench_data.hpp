@@ -75,6 +75,19 @@ inline void register_ms(const std::string& name, BenchmarkFn fn) {
   benchmark::RegisterBenchmark(name.c_str(), fn)->Unit(benchmark::kMillisecond);
 }
 
+/// @brief A benchmark function given a thread count.
+using ThreadsBenchmarkFn = void (*)(benchmark::State&, int);
+
+/// @brief Registers `name`/threads:N for N = 1, 2, 4 and 8, timed by the wall clock (the work is
+///        spread over threads), in milliseconds: the speed-up of a parallel stage by thread count.
+inline void register_threads(const std::string& name, ThreadsBenchmarkFn fn) {
+  for (int threads : {1, 2, 4, 8}) {
+    benchmark::RegisterBenchmark((name + "/threads:" + std::to_string(threads)).c_str(), fn, threads)
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime();
+  }
+}
+
 /// @brief Registers `op`/plumb/`dataset`, then `op`/pcl/`dataset` and `op`/open3d/`dataset` for the
 ///        peers that are built (pass PLUMB_BENCH_PCL(fn) and PLUMB_BENCH_OPEN3D(fn): nullptr without
 ///        the peer), all in milliseconds.

@@ -72,12 +72,13 @@ void finish(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(cloud().size()));
 }
 
-void bm_normals_plumb(benchmark::State& state) {
+void bm_normals_plumb_threads(benchmark::State& state, int threads) {
   if (!require(state)) return;
   const plumb::PointCloud& c = cloud();
   plumb::NormalSettings ns;
   ns.k = kMaxNn;
   ns.radius = kRadius;
+  ns.threads = threads;
   for (auto _ : state) {
     const plumb::KdTree<3> tree(c.points);
     plumb::NormalResult r = plumb::estimate_normals(c.points, tree, c.points, ns);
@@ -86,17 +87,22 @@ void bm_normals_plumb(benchmark::State& state) {
   finish(state);
 }
 
-void bm_fpfh_plumb(benchmark::State& state) {
+void bm_normals_plumb(benchmark::State& state) { bm_normals_plumb_threads(state, 1); }
+
+void bm_fpfh_plumb_threads(benchmark::State& state, int threads) {
   if (!require(state)) return;
   plumb::FpfhSettings fs;
   fs.radius = kRadius;
   fs.max_neighbors = kMaxNn;
+  fs.threads = threads;
   for (auto _ : state) {
     plumb::FpfhResult r = plumb::compute_fpfh(cloud(), fs);
     benchmark::DoNotOptimize(r.features.data());
   }
   finish(state);
 }
+
+void bm_fpfh_plumb(benchmark::State& state) { bm_fpfh_plumb_threads(state, 1); }
 
 #ifdef PLUMB_BENCH_HAVE_PCL
 pcl::PointCloud<pcl::PointXYZ>::Ptr pcl_points() {
@@ -184,6 +190,8 @@ int main(int argc, char** argv) {
   const std::string ds = kDataset;
   plumb::bench::register_with_peers("normals", ds, bm_normals_plumb, PLUMB_BENCH_PCL(bm_normals_pcl),
                                     PLUMB_BENCH_OPEN3D(bm_normals_open3d));
+  plumb::bench::register_threads("normals/plumb/" + ds, bm_normals_plumb_threads);
+  plumb::bench::register_threads("fpfh/plumb/" + ds, bm_fpfh_plumb_threads);
   plumb::bench::register_with_peers("fpfh", ds, bm_fpfh_plumb, PLUMB_BENCH_PCL(bm_fpfh_pcl),
                                     PLUMB_BENCH_OPEN3D(bm_fpfh_open3d));
   return plumb::bench::run_benchmarks(argc, argv);

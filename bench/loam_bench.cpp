@@ -133,10 +133,11 @@ const SiteRun& site16() {
 
 // every_frame_icp: the hybrid switch sends every frame to ICP (a plane threshold no frame reaches),
 // so the ICP frames' cost (point-to-distribution pairs and the LOAM residuals beside them) is timed.
-void BM_LioFrame(benchmark::State& state, LioMode mode, bool every_frame_icp) {
+void BM_LioFrame(benchmark::State& state, LioMode mode, bool every_frame_icp, int threads = 1) {
   const SiteRun& run = site16();
   HybridLioSettings s = run.settings;
   s.mode = mode;
+  s.threads = threads;
   if (every_frame_icp) s.features.min_plane_points = std::numeric_limits<std::size_t>::max();
   std::unique_ptr<HybridLio> lio;
   auto restart = [&] {
@@ -159,6 +160,9 @@ BENCHMARK_CAPTURE(BM_LioFrame, site16_icp, LioMode::kHybrid, true)
 BENCHMARK_CAPTURE(BM_LioFrame, site16_loam, LioMode::kLoam, false)
     ->Name("lio_frame_loam_only/plumb/site16")
     ->Unit(benchmark::kMillisecond);
+
+void BM_LioFrameThreads(benchmark::State& state, int threads) { BM_LioFrame(state, LioMode::kHybrid, false, threads); }
+const bool kLioThreadsRegistered = (bench::register_threads("lio_frame/plumb/site16", BM_LioFrameThreads), true);
 
 BENCHMARK_CAPTURE(BM_LoamFeatures, hdl32, false)->Name("loam_features/plumb/hdl32")->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_LoamFeatures, hdl32_16ring, true)->Name("loam_features/plumb/hdl32_16ring")->Unit(benchmark::kMillisecond);

@@ -90,10 +90,11 @@ void bm_plumb(benchmark::State& state) {
   state.counters["found"] = static_cast<double>(found) / static_cast<double>(runs);
 }
 
-void bm_plumb_sacia(benchmark::State& state) {
+void bm_plumb_sacia_threads(benchmark::State& state, int threads) {
   const Data& d = data();
   if (!d.ok) return state.SkipWithError("AC20-FZK-Haus.ifc missing (PLUMB_DATA_DIR)");
-  const plumb::LocalizeSettings settings;
+  plumb::LocalizeSettings settings;
+  settings.threads = threads;
   const plumb::LocalizeTarget target = plumb::prepare_localize_target(d.bim_cloud, settings);
   std::size_t k = 0, found = 0, runs = 0;
   for (auto _ : state) {
@@ -105,6 +106,8 @@ void bm_plumb_sacia(benchmark::State& state) {
   }
   state.counters["found"] = static_cast<double>(found) / static_cast<double>(runs);
 }
+
+void bm_plumb_sacia(benchmark::State& state) { bm_plumb_sacia_threads(state, 1); }
 
 #ifdef PLUMB_BENCH_HAVE_OPEN3D
 namespace o3g = open3d::geometry;
@@ -161,6 +164,7 @@ int main(int argc, char** argv) {
   benchmark::RegisterBenchmark("bim_localize/plumb_sacia/fzk_haus", bm_plumb_sacia)
       ->Unit(benchmark::kMillisecond)
       ->Iterations(5);
+  plumb::bench::register_threads("bim_localize/plumb_sacia/fzk_haus", bm_plumb_sacia_threads);
 #ifdef PLUMB_BENCH_HAVE_OPEN3D
   benchmark::RegisterBenchmark("bim_localize/open3d/fzk_haus", bm_open3d)->Unit(benchmark::kMillisecond)->Iterations(5);
 #endif

@@ -74,10 +74,11 @@ const IndoorRun& fzk_indoor() {
   return *run;
 }
 
-void BM_BimOdometryFrame(benchmark::State& state, bool use_bim, bool as_built) {
+void BM_BimOdometryFrame(benchmark::State& state, bool use_bim, bool as_built, int threads = 1) {
   const IndoorRun& run = fzk_indoor();
   BimOdometrySettings s;
   s.T_base_lidar = run.T_base_lidar;
+  s.threads = threads;
   s.use_bim = use_bim;
   s.estimate_as_built = as_built;
   std::unique_ptr<BimOdometry> odometry;
@@ -92,6 +93,12 @@ void BM_BimOdometryFrame(benchmark::State& state, bool use_bim, bool as_built) {
   state.counters["points_per_frame"] = static_cast<double>(run.frames.back().size());
   if (use_bim && frames > 0) state.counters["anchors_accepted_per_frame"] = static_cast<double>(anchors) / frames;
 }
+
+// Threads within a frame: key points beside the front end, the registration's search split. (plumb
+// run also overlaps frames, which this frame-by-frame loop does not.)
+void BM_BimOdometryFrameThreads(benchmark::State& state, int threads) { BM_BimOdometryFrame(state, true, false, threads); }
+const bool kThreadsRegistered =
+    (bench::register_threads("bim_odometry_frame/plumb/fzk_rfans32", BM_BimOdometryFrameThreads), true);
 
 }  // namespace
 

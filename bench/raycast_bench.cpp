@@ -15,6 +15,7 @@
 #include "plumb/core/rng.hpp"
 #include "plumb/sim/lidar.hpp"
 #include "plumb/sim/raycaster.hpp"
+#include "plumb/sim/scenario.hpp"
 #include "plumb/sim/world.hpp"
 
 #if defined(__linux__)
@@ -287,6 +288,28 @@ void BM_SweepPlumb(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * lidar.num_rays()));
 }
 BENCHMARK(BM_SweepPlumb)->Name("sweep_rfans32/plumb/fzk_haus")->Unit(benchmark::kMillisecond);
+
+/// The frames of a 3 m indoor scenario run in FZK-Haus (rfans32, 10 Hz: about 30 sweeps with the
+/// wheels and the IMU), simulated on `threads` threads from a plan made once: the simulator's
+/// parallel stage.
+void BM_SimulateFrames(benchmark::State& state, int threads) {
+  const Scene& s = scene();
+  plumb::sim::ScenarioSettings settings = plumb::sim::scenario_defaults(plumb::sim::ScenarioKind::kIndoor);
+  settings.lidar = plumb::sim::lidar_preset("rfans32");
+  settings.length = 3.0;
+  settings.num_threads = threads;
+  static const plumb::sim::ScenarioPlan plan = plumb::sim::plan_scenario(s.mesh, settings);
+  std::size_t frames = 0;
+  for (auto _ : state) {
+    frames = 0;
+    plumb::sim::simulate_scenario(plan, settings, [&](std::size_t, double, const plumb::PointCloud& cloud) {
+      benchmark::DoNotOptimize(cloud.points.data());
+      ++frames;
+    });
+  }
+  state.counters["frames"] = static_cast<double>(frames);
+}
+const bool kSimulateRegistered = (plumb::bench::register_threads("simulate_frames/plumb/fzk_haus", BM_SimulateFrames), true);
 
 }  // namespace
 

@@ -190,12 +190,13 @@ void report_icp(benchmark::State& state, const Eigen::Isometry3d& T, const IcpDa
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * c.source.size()));
 }
 
-void bm_icp_plumb(benchmark::State& state) {
+void bm_icp_plumb_threads(benchmark::State& state, int threads) {
   const IcpData& c = icp_data();
   plumb::IcpSettings s;
   s.max_correspondence_distance = 1.0;
   s.min_overlap = 0.0;  // one round: plain ICP at d = 1 m
   s.max_iterations = 50;
+  s.threads = threads;
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   int iterations = 0;
   for (auto _ : state) {
@@ -208,6 +209,8 @@ void bm_icp_plumb(benchmark::State& state) {
   state.counters["iterations"] = iterations;
   report_icp(state, T, c);
 }
+
+void bm_icp_plumb(benchmark::State& state) { bm_icp_plumb_threads(state, 1); }
 
 #ifdef PLUMB_BENCH_HAVE_PCL
 pcl::PointCloud<pcl::PointXYZ>::Ptr to_pcl(const plumb::PointCloud& c) {
@@ -350,5 +353,6 @@ int main(int argc, char** argv) {
   }
   plumb::bench::register_with_peers("icp", ds, bm_icp_plumb, PLUMB_BENCH_PCL(bm_icp_pcl),
                                     PLUMB_BENCH_OPEN3D(bm_icp_open3d));
+  plumb::bench::register_threads("icp/plumb/" + ds, bm_icp_plumb_threads);
   return plumb::bench::run_benchmarks(argc, argv);
 }
