@@ -123,8 +123,7 @@ void track_frames(const io::FrameDumpReader& dump, const bim::BimMesh& mesh, con
   os.T_base_lidar = dump.meta().T_base_lidar;
   // With threads, two of them prepare and match the next frames (below) all the time; the
   // odometry's own parallel work (the registration's search) gets the others, if any.
-  const bool pipelined = settings.odometry.threads != 1;
-  if (pipelined) os.threads = std::max(1, resolve_thread_count(settings.odometry.threads) - 2);
+  if (settings.odometry.threads != 1) os.threads = std::max(1, resolve_thread_count(settings.odometry.threads) - 2);
   BimOdometry odometry(std::move(bim_cloud), report.T_world_base0, os);
   const Pose2 odom0 = odom.at(dump.stamp(0));
   const auto t_frames = std::chrono::steady_clock::now();

@@ -327,23 +327,21 @@ FpfhResult compute_fpfh(const PointCloud& cloud, const FpfhSettings& settings,
   nb.build(out.indices);
   const std::vector<float> spfh = detail::compute_spfh(cloud, nb);
 
-  // The FPFH of every query with neighbours (each writes only its own signature).
-  auto row_of_query = [&](std::size_t f) {
-    const std::size_t p = out.indices[f];
-    const std::uint32_t r = usable[p] ? nb.row_of[p] : detail::FpfhNeighborhoods::kNoRow;
-    return (r == detail::FpfhNeighborhoods::kNoRow || nb.rows.begin[r] == nb.rows.begin[r + 1])
-               ? detail::FpfhNeighborhoods::kNoRow
-               : r;
-  };
+  // The FPFH of every query with neighbours (each writes only its own signature; the queries
+  // without are counted per chunk).
+  std::vector<std::size_t> invalid(chunk_count(out.indices.size(), kSignatureGrain), 0);
   parallel_for(settings.threads, out.indices.size(), kSignatureGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t f = begin; f < end; ++f) {
-      const std::uint32_t r = row_of_query(f);
-      if (r != detail::FpfhNeighborhoods::kNoRow) detail::fpfh_signature(nb, spfh, r, out.features[f]);
+      const std::size_t p = out.indices[f];
+      const std::uint32_t r = usable[p] ? nb.row_of[p] : detail::FpfhNeighborhoods::kNoRow;
+      if (r == detail::FpfhNeighborhoods::kNoRow || nb.rows.begin[r] == nb.rows.begin[r + 1]) {
+        ++invalid[begin / kSignatureGrain];
+      } else {
+        detail::fpfh_signature(nb, spfh, r, out.features[f]);
+      }
     }
   });
-  for (std::size_t f = 0; f < out.indices.size(); ++f) {
-    out.num_invalid += row_of_query(f) == detail::FpfhNeighborhoods::kNoRow ? 1 : 0;
-  }
+  for (std::size_t k : invalid) out.num_invalid += k;
   return out;
 }
 
