@@ -45,6 +45,7 @@ struct RunOptions {
   std::size_t correct_every = 1;
   std::vector<double> start_hint;
   double start_hint_radius = 3.0;
+  double start_search_distance = 15.0;
   int threads = 0;
 };
 
@@ -66,6 +67,7 @@ void run(const RunOptions& o) {
     PLUMB_CHECK(dump.has_ground_truth(), o.dump_dir << ": --gt-start needs gt.tum in the dump");
     settings.initial_pose = dump.ground_truth().poses.front();
   }
+  settings.start_search_distance = o.start_search_distance;
   if (!o.start_hint.empty()) {
     settings.start_hint = Eigen::Vector3d(o.start_hint[0], o.start_hint[1], 0.0);
     settings.start_hint_radius = o.start_hint_radius;
@@ -132,6 +134,11 @@ void register_run_command(CLI::App& app) {
       ->expected(2);
   cmd->add_option("--start-hint-radius", o->start_hint_radius, "How far from --start-hint the robot may be [m]")
       ->check(positive_number())
+      ->capture_default_str();
+  cmd->add_option("--start-search-distance", o->start_search_distance,
+                  "When the first frame alone fits several places, drive on up to this far [m] and localize it from "
+                  "the frames seen on the way (0 = the first frame decides)")
+      ->check(non_negative_number())
       ->capture_default_str();
   // Unsigned: the check rejects "-3", which would otherwise wrap to a huge count.
   cmd->add_option("--threads", o->threads, "Threads (0 = every core; the results are the same for any count)")

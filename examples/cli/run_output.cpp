@@ -4,10 +4,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <system_error>
 
 #include "cli_support.hpp"
@@ -208,7 +210,8 @@ nlohmann::json run_report_json(const RunReport& r) {
     j["localization"] = {{"score", l.score},           {"second_score", l.second_score}, {"ambiguous", l.ambiguous},
                          {"overlap", l.fine.overlap},  {"rmse", l.fine.rmse},            {"see_through", l.see_through},
                          {"storey", l.storey},         {"seconds_search", l.seconds_search},
-                         {"seconds_fine", l.seconds_fine}};
+                         {"seconds_fine", l.seconds_fine}, {"views", l.views},
+                         {"distance", r.localization_distance}, {"frames_read", r.localization_frames}};
   }
   j["T_world_base0"] = pose_json(r.T_world_base0);
   j["bim_points"] = r.bim_points;
@@ -318,15 +321,26 @@ void write_deviations(const RunReport& r, const std::string& out_dir) {
 
 void check_localized(const RunReport& r, const io::FrameDumpReader& dump, const std::string& model_name) {
   if (r.localization_status != Status::kOk) {
-    if (r.localization.ambiguous) {
-      PLUMB_THROW(dump.dir() << ": the first frame fits two places of " << model_name << " about as well (score "
-                             << r.localization.score << " and " << r.localization.second_score
-                             << "); give --start-hint X Y (the room the robot starts in) or --gt-start");
+    if (r.ambiguous_localization) {
+      const BimLocalization& a = *r.ambiguous_localization;
+      const auto place = [](const Eigen::Isometry3d& T) {
+        std::ostringstream o;
+        o << "(" << T.translation().x() << ", " << T.translation().y() << ", heading "
+          << std::atan2(T.linear()(1, 0), T.linear()(0, 0)) * 180.0 / kPi << " deg)";
+        return o.str();
+      };
+      PLUMB_THROW(dump.dir() << ": the start fits two places of " << model_name << " about as well, "
+                             << place(a.T_world_base_search) << " and " << place(a.T_world_base_second)
+                             << " (scores " << a.score << " and " << a.second_score << ", from " << a.views
+                             << " frame(s); " << r.localization_distance
+                             << " m driven in all); give --start-hint X Y (the room the robot starts in), a longer "
+                                "--start-search-distance, or --gt-start");
     }
     PLUMB_THROW(dump.dir() << ": the first frame could not be localized in " << model_name << " ("
                            << to_string(r.localization_status) << ", score " << r.localization.score << ", overlap "
-                           << r.localization.fine.overlap << ", see-through " << r.localization.see_through
-                           << "); give --start-hint X Y, --gt-start, or check that the dump was recorded in this building");
+                           << r.localization.fine.overlap << ", see-through " << r.localization.see_through << ", from "
+                           << r.localization.views << " frame(s) over " << r.localization_distance
+                           << " m of driving); give --start-hint X Y, --gt-start, or check that the dump was recorded in this building");
   }
 }
 
@@ -377,6 +391,10 @@ void print_run_summary(const RunReport& r) {
     std::printf("initial localization: %s in %.2f s (score %.2f, second %.2f, overlap %.2f, rmse %.1f mm)\n",
                 to_string(r.localization_status), r.seconds_localize, r.localization.score, r.localization.second_score,
                 r.localization.fine.overlap, r.localization.fine.rmse * 1e3);
+    if (r.localization.views > 1) {
+      std::printf("  from %zu frames over the first %.1f m of driving (the first frame alone fitted several places)\n",
+                  r.localization.views, r.localization_distance);
+    }
   }
   if (!r.has_ground_truth) return;
   std::printf("initial pose error: %.1f mm, %.3f deg\n", r.initial_error_xy * 1e3, r.initial_error_yaw_deg);

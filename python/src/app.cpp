@@ -34,6 +34,8 @@ void bind_run_settings(py::module_& m) {
       .def_readwrite("localizer", &RunSettings::localizer)
       .def_readwrite("start_hint", &RunSettings::start_hint)
       .def_readwrite("start_hint_radius", &RunSettings::start_hint_radius)
+      .def_readwrite("start_search_distance", &RunSettings::start_search_distance)
+      .def_readwrite("start_view_spacing", &RunSettings::start_view_spacing)
       .def_readwrite("deskew", &RunSettings::deskew)
       .def_readwrite("max_frames", &RunSettings::max_frames);
   py::class_<ObservationRow>(m, "ObservationRow", "One row of Liu et al. 2022, Table 2.")
@@ -59,6 +61,8 @@ void bind_run_report(py::module_& m) {
       .def_readonly("localized", &RunReport::localized)
       .def_readonly("localization_status", &RunReport::localization_status)
       .def_readonly("localization", &RunReport::localization)
+      .def_readonly("localization_distance", &RunReport::localization_distance)
+      .def_readonly("localization_frames", &RunReport::localization_frames)
       .def_readonly("bim_points", &RunReport::bim_points)
       .def_readonly("anchors_accepted", &RunReport::anchors_accepted)
       .def_readonly("anchors_rejected", &RunReport::anchors_rejected)

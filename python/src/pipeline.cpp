@@ -2,11 +2,13 @@
 // Pipelines fed one frame at a time: BimOdometry, BimLocalizer, HybridLio.
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 
 #include "convert.hpp"
+#include "plumb/core/error.hpp"
 #include "plumb/pipeline/bim_localizer.hpp"
 #include "plumb/pipeline/bim_odometry.hpp"
 #include "plumb/pipeline/hybrid_lio.hpp"
@@ -145,6 +147,7 @@ void bind_bim_localizer(py::module_& m) {
       .def_readonly("fine", &BimLocalization::fine)
       .def_readonly("refine_starts", &BimLocalization::refine_starts)
       .def_readonly("num_points", &BimLocalization::num_points)
+      .def_readonly("views", &BimLocalization::views)
       .def_readonly("seconds_search", &BimLocalization::seconds_search)
       .def_readonly("seconds_fine", &BimLocalization::seconds_fine);
   def_pose(r, "T_world_base", &BimLocalization::T_world_base);
@@ -172,6 +175,29 @@ void bind_bim_localizer(py::module_& m) {
           py::arg("frame"), py::arg("T_base_lidar"), py::arg("hint") = py::none(), py::arg("hint_radius") = 3.0,
           "Place a LiDAR frame (sensor frame) in the building; `hint` (x, y) restricts the search to within "
           "hint_radius of it.")
+      .def(
+          "localize_views",
+          [](const BimLocalizer& l, const py::list& frame_objects, const py::list& motions,
+             const py::object& T_base_lidar, const py::object& hint, double hint_radius) {
+            PLUMB_CHECK(motions.size() == frame_objects.size(), "BimLocalizer.localize_views: " << frame_objects.size()
+                                                                    << " frames but " << motions.size() << " motions");
+            const Eigen::Isometry3d T = pose_from_array(T_base_lidar, "BimLocalizer.localize_views: T_base_lidar");
+            std::vector<PointCloud> frames;
+            for (const py::handle f : frame_objects) frames.push_back(cloud_from_object(f, "BimLocalizer.localize_views: frame"));
+            std::vector<LocalizerView> views;
+            for (std::size_t i = 0; i < frames.size(); ++i) {
+              views.push_back(LocalizerView{&frames[i], pose_from_array(motions[i], "BimLocalizer.localize_views: motion")});
+            }
+            std::optional<Vector2d> h;
+            if (!hint.is_none()) h = hint.cast<Vector2d>();
+            py::gil_scoped_release release;
+            return l.localize(views, T, h, hint_radius);
+          },
+          py::arg("frames"), py::arg("motions"), py::arg("T_base_lidar"), py::arg("hint") = py::none(),
+          py::arg("hint_radius") = 3.0,
+          "Place the first of several LiDAR frames from all of them: `motions[i]` (4x4) is frame i's base pose in "
+          "the first frame's base frame (e.g. a scan matcher's chained motion; the first is the identity). The "
+          "frames together tell look-alike places apart that one frame cannot.")
       .def("storeys", &BimLocalizer::storeys);
 }
 

@@ -123,3 +123,24 @@ def test_run_lio_and_hybrid_lio_equal_plumb_lio(sim_run, run_cli, tmp_path):
     plumb.write_tum(trajectory, tmp_path / "hybrid_lio.tum")
     assert (tmp_path / "hybrid_lio.tum").read_bytes() == expected
     np.testing.assert_array_equal(lio.T_world_base, trajectory.poses[-1])
+
+
+def test_localize_views_of_one_frame_equals_localize_and_more_frames_agree(sim_run, building):
+    dump_dir, _ = sim_run
+    mesh, bim_cloud = building
+    dump = plumb.FrameDump(dump_dir)
+    T_base_lidar = dump.meta.T_base_lidar
+    gt = dump.ground_truth()
+    localizer = plumb.BimLocalizer(mesh, bim_cloud)
+    frames = [frame for _, frame in dump][:21]
+    alone = localizer.localize(frames[0], T_base_lidar)
+    one = localizer.localize_views([frames[0]], [np.eye(4)], T_base_lidar)
+    assert one.views == 1 and one.status == alone.status and one.score == alone.score
+    np.testing.assert_array_equal(one.T_world_base, alone.T_world_base)
+    # Frames 10 and 20 with their true motion from frame 0: the first frame's pose again.
+    motions = [np.linalg.inv(gt.poses[0]) @ gt.poses[i] for i in (0, 10, 20)]
+    three = localizer.localize_views([frames[i] for i in (0, 10, 20)], motions, T_base_lidar)
+    assert three.views == 3 and three.status == plumb.Status.ok
+    assert np.linalg.norm(three.T_world_base[:2, 3] - gt.poses[0][:2, 3]) < 0.15
+    with pytest.raises(Exception, match="motions"):
+        localizer.localize_views(frames[:2], [np.eye(4)], T_base_lidar)

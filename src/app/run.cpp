@@ -86,10 +86,51 @@ struct FrameSource {
   }
 };
 
-// Liu et al. 2022, sec. 1: the first frame in the BIM, given or localized. Returns the first frame
-// when localizing read it, for the first step of the frame loop.
+// The first frame is localized again from the frames after it (RunSettings::start_search_distance):
+// the front end alone chains their motion from frame 0, and a frame joins the views every
+// start_view_spacing of its path. Stops at the first kOk, at the distance or at the end of the frames;
+// report.localization is the last try.
+void localize_while_driving(const io::FrameDumpReader& dump, const OdometryInterpolator& odom,
+                            const FrameSource& frame_at, const BimLocalizer& localizer,
+                            const std::shared_ptr<const PointCloud>& bim_cloud, const PointCloud& first_frame,
+                            const std::optional<Vector2d>& hint, const RunSettings& settings, RunReport& report) {
+  BimOdometrySettings os = settings.odometry;
+  os.T_base_lidar = dump.meta().T_base_lidar;
+  os.threads = 1;  // only its front end runs
+  os.estimate_as_built = false;
+  BimOdometry front(bim_cloud, Eigen::Isometry3d::Identity(), os);
+  std::vector<PointCloud> later;  // the frames of views 1, 2, ...
+  std::vector<Eigen::Isometry3d> motions;
+  double path = 0.0, last_view = 0.0;
+  Eigen::Isometry3d previous = Eigen::Isometry3d::Identity();
+  for (std::size_t i = 0; i < report.frames_requested; ++i) {
+    PointCloud frame = i == 0 ? PointCloud{} : frame_at(i);
+    BimFrameInput input = front.prepare_scan(i == 0 ? first_frame : frame, dump.stamp(i), i);
+    front.front_end(input, odom.at(dump.stamp(i)));
+    report.localization_frames = i + 1;
+    const Eigen::Isometry3d T = input.front->T_world_base_uncorrected;
+    path += (T.translation() - previous.translation()).head<2>().norm();
+    previous = T;
+    if (path > settings.start_search_distance) break;
+    if (i == 0 || path - last_view < settings.start_view_spacing) continue;
+    last_view = path;
+    later.push_back(std::move(frame));
+    motions.push_back(T);
+    std::vector<LocalizerView> views{LocalizerView{&first_frame, Eigen::Isometry3d::Identity()}};
+    for (std::size_t v = 0; v < later.size(); ++v) views.push_back(LocalizerView{&later[v], motions[v]});
+    report.localization = localizer.localize(views, dump.meta().T_base_lidar, hint, settings.start_hint_radius);
+    report.localization_distance = path;
+    if (report.localization.status == Status::kOk) break;
+    if (report.localization.ambiguous) report.ambiguous_localization = report.localization;
+  }
+}
+
+// Liu et al. 2022, sec. 1: the first frame in the BIM, given or localized (from more frames when
+// it alone is not enough). Returns the first frame when localizing read it, for the first step of
+// the frame loop.
 std::optional<PointCloud> place_first_frame(const io::FrameDumpReader& dump, const bim::BimMesh& mesh,
-                                            const PointCloud& bim_cloud, const FrameSource& frame_at,
+                                            const std::shared_ptr<const PointCloud>& bim_cloud,
+                                            const OdometryInterpolator& odom, const FrameSource& frame_at,
                                             const RunSettings& settings, RunReport& report) {
   const auto t_loc = std::chrono::steady_clock::now();
   std::optional<PointCloud> first_frame;
@@ -104,8 +145,14 @@ std::optional<PointCloud> place_first_frame(const io::FrameDumpReader& dump, con
                   "run_bim_odometry: the start hint must be finite and its radius > 0");
       hint = settings.start_hint->head<2>();
     }
-    const BimLocalizer localizer(mesh, bim_cloud, settings.localizer);
+    const BimLocalizer localizer(mesh, *bim_cloud, settings.localizer);
     report.localization = localizer.localize(*first_frame, dump.meta().T_base_lidar, hint, settings.start_hint_radius);
+    report.localization_frames = 1;
+    if (report.localization.ambiguous) report.ambiguous_localization = report.localization;
+    if (report.localization.status != Status::kOk && settings.start_search_distance > 0.0) {
+      localize_while_driving(dump, odom, frame_at, localizer, bim_cloud, *first_frame, hint, settings, report);
+    }
+    if (report.localization.status == Status::kOk) report.ambiguous_localization.reset();
     report.localization_status = report.localization.status;
     report.T_world_base0 = report.localization.T_world_base;
   }
@@ -253,6 +300,10 @@ RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& 
   PLUMB_CHECK(mesh.num_triangles() > 0, "run_bim_odometry: the model has no geometry");
   PLUMB_CHECK(settings.deviation_tolerance > 0.0 && std::isfinite(settings.deviation_tolerance),
               "run_bim_odometry: deviation_tolerance must be positive, got " << settings.deviation_tolerance);
+  PLUMB_CHECK(settings.start_search_distance >= 0.0 && std::isfinite(settings.start_search_distance) &&
+                  settings.start_view_spacing > 0.0 && std::isfinite(settings.start_view_spacing),
+              "run_bim_odometry: start_search_distance must be >= 0 and start_view_spacing > 0, got "
+                  << settings.start_search_distance << " and " << settings.start_view_spacing);
   RunReport report;
   const OdometryInterpolator odom(dump.odometry());
   auto bim_cloud = std::make_shared<const PointCloud>(bim::sample_bim_cloud(mesh, settings.bim_spacing));
@@ -262,7 +313,7 @@ RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& 
   check_odometry_coverage(dump, odom, n, report);
 
   const FrameSource frame_at{dump, odom, settings.deskew};
-  std::optional<PointCloud> first_frame = place_first_frame(dump, mesh, *bim_cloud, frame_at, settings, report);
+  std::optional<PointCloud> first_frame = place_first_frame(dump, mesh, bim_cloud, odom, frame_at, settings, report);
   const FrameGroundTruth gt = read_frame_ground_truth(dump, n);
   report.has_ground_truth = gt.used;
   report.ground_truth_note = gt.note;

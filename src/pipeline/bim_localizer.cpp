@@ -84,12 +84,46 @@ std::vector<Vector2d> band_scan(const PointCloud& frame, const Eigen::Isometry3f
   return scan;
 }
 
-/// Up to 200 of the points, evenly spread.
-std::vector<Vector2d> probe_points(const std::vector<Vector2d>& scan) {
-  std::vector<Vector2d> probe;
-  const std::size_t num_probe = std::min<std::size_t>(scan.size(), 200);
-  for (std::size_t i = 0; i < num_probe; ++i) probe.push_back(scan[i * scan.size() / num_probe]);
+/// Points grouped by the sensor position they were seen from, for the see-through test.
+struct Rays {
+  std::vector<std::vector<Vector2d>> points;  ///< per sensor
+  std::vector<Vector2d> sensors;
+};
+
+/// The points `pick` of `points` (all when empty), grouped by view.
+Rays rays_of(const std::vector<Vector2d>& points, const std::vector<std::size_t>& view,
+             const std::vector<Vector2d>& sensors, const std::vector<std::size_t>& pick = {}) {
+  Rays r;
+  r.sensors = sensors;
+  r.points.resize(sensors.size());
+  if (pick.empty()) {
+    for (std::size_t i = 0; i < points.size(); ++i) r.points[view[i]].push_back(points[i]);
+  } else {
+    for (std::size_t i : pick) r.points[view[i]].push_back(points[i]);
+  }
+  return r;
+}
+
+/// Up to 200 of the point indices, evenly spread.
+std::vector<std::size_t> probe_indices(std::size_t n) {
+  std::vector<std::size_t> probe;
+  const std::size_t num_probe = std::min<std::size_t>(n, 200);
+  for (std::size_t i = 0; i < num_probe; ++i) probe.push_back(i * n / num_probe);
   return probe;
+}
+
+/// Fraction of the rays' points seen through `solid` at `pose` (CorrelativeMap2D::see_through per
+/// sensor, weighted by its points).
+double see_through(const CorrelativeMap2D& solid, const Rays& rays, const Pose2& pose, double margin) {
+  if (rays.sensors.size() == 1) return solid.see_through(rays.points[0], pose, rays.sensors[0], margin);
+  double crossed = 0.0;
+  std::size_t total = 0;
+  for (std::size_t g = 0; g < rays.sensors.size(); ++g) {
+    if (rays.points[g].empty()) continue;
+    crossed += solid.see_through(rays.points[g], pose, rays.sensors[g], margin) * static_cast<double>(rays.points[g].size());
+    total += rays.points[g].size();
+  }
+  return total > 0 ? crossed / static_cast<double>(total) : 0.0;
 }
 
 void check_settings(const BimLocalizerSettings& s) {
@@ -208,10 +242,8 @@ std::vector<int> BimLocalizer::storeys() const {
   return out;
 }
 
-BimLocalizer::StoreySearch BimLocalizer::search_storeys(const std::vector<Vector2d>& scan,
-                                                         const std::vector<Vector2d>& normals, const Vector2d& sensor,
-                                                         const std::optional<Vector2d>& hint, double hint_radius,
-                                                         BimLocalization& out) const {
+BimLocalizer::StoreySearch BimLocalizer::search_storeys(const BandScan& scan, const std::optional<Vector2d>& hint,
+                                                         double hint_radius, BimLocalization& out) const {
   CorrelativeSearchSettings ss;
   ss.max_points = settings_.max_points;
   // With a hint, a weaker 2D match may still be confirmed in 3D (see min_score_hinted).
@@ -227,15 +259,15 @@ BimLocalizer::StoreySearch BimLocalizer::search_storeys(const std::vector<Vector
   StoreySearch found;
   // The search's free-space test runs on up to 200 of the points (evenly spread): it is called on
   // every pose that would become the best, thousands of times in a building of look-alike rooms.
-  const std::vector<Vector2d> probe = probe_points(scan);
+  const Rays probe = rays_of(scan.points, scan.view, scan.sensors, probe_indices(scan.points.size()));
   for (const StoreyMap& m : maps_) {
     ss.accept = nullptr;
     if (m.solid && settings_.search_see_through > 0.0) {
       ss.accept = [&](const Pose2& pose) {
-        return m.solid->see_through(probe, pose, sensor, settings_.see_through_margin) <= settings_.search_see_through;
+        return see_through(*m.solid, probe, pose, settings_.see_through_margin) <= settings_.search_see_through;
       };
     }
-    const CorrelativeResult cr = m.map->match(scan, ss, normals);
+    const CorrelativeResult cr = m.map->match(scan.points, ss, scan.normals);
     out.rejected_by_free_space += cr.rejected;
     found.truncated = found.truncated || cr.truncated;
     out.num_points = cr.num_points;
@@ -324,8 +356,8 @@ void BimLocalizer::retry_refinement(const PointCloud& result_frame, const Eigen:
   }
 }
 
-void BimLocalizer::apply_gates(const std::vector<Vector2d>& scan, const Vector2d& sensor, const StoreySearch& found,
-                               bool hinted_weak, BimLocalization& out) const {
+void BimLocalizer::apply_gates(const BandScan& scan, const StoreySearch& found, bool hinted_weak,
+                               BimLocalization& out) const {
   const double shift = (out.T_world_base.translation() - out.T_world_base_search.translation()).norm();
   const StoreyMap* result_map = found.best_map;
   for (const StoreyMap& m : maps_)
@@ -333,7 +365,8 @@ void BimLocalizer::apply_gates(const std::vector<Vector2d>& scan, const Vector2d
   const Pose2 refined{out.T_world_base.translation().x(), out.T_world_base.translation().y(),
                       std::atan2(out.T_world_base.linear()(1, 0), out.T_world_base.linear()(0, 0))};
   if (result_map->solid) {
-    out.see_through = result_map->solid->see_through(scan, refined, sensor, settings_.see_through_margin);
+    out.see_through = see_through(*result_map->solid, rays_of(scan.points, scan.view, scan.sensors), refined,
+                                  settings_.see_through_margin);
   }
   out.truncated = found.truncated;
   const bool score_ok = out.score >= settings_.min_score || (hinted_weak && out.fine.overlap >= settings_.min_overlap_hinted);
@@ -348,20 +381,51 @@ void BimLocalizer::apply_gates(const std::vector<Vector2d>& scan, const Vector2d
 BimLocalization BimLocalizer::localize(const PointCloud& frame, const Eigen::Isometry3d& T_base_lidar,
                                        const std::optional<Vector2d>& hint, double hint_radius) const {
   frame.check_consistent("BimLocalizer::localize: frame");
+  return localize(std::vector<LocalizerView>{LocalizerView{&frame, Eigen::Isometry3d::Identity()}}, T_base_lidar, hint,
+                  hint_radius);
+}
+
+BimLocalization BimLocalizer::localize(const std::vector<LocalizerView>& views, const Eigen::Isometry3d& T_base_lidar,
+                                       const std::optional<Vector2d>& hint, double hint_radius) const {
+  PLUMB_CHECK(!views.empty(), "BimLocalizer::localize: no frame");
+  for (std::size_t v = 0; v < views.size(); ++v) {
+    PLUMB_CHECK(views[v].frame != nullptr, "BimLocalizer::localize: view " << v << " has no frame");
+    views[v].frame->check_consistent(v == 0 ? "BimLocalizer::localize: frame" : "BimLocalizer::localize: frame of a later view");
+    PLUMB_CHECK(views[v].T_base0_base.matrix().allFinite(), "BimLocalizer::localize: the motion of view " << v << " is not finite");
+  }
   PLUMB_CHECK(T_base_lidar.matrix().allFinite(), "BimLocalizer::localize: T_base_lidar is not finite");
   PLUMB_CHECK(!hint || (hint->allFinite() && std::isfinite(hint_radius) && hint_radius > 0.0),
               "BimLocalizer::localize: the hint must be finite and its radius > 0");
   BimLocalization out;
+  out.views = views.size();
   const auto t0 = std::chrono::steady_clock::now();
 
-  // The frame's points in the height band, in the base frame, one per map cell, and their normals.
+  // Each view's points in the height band (in its own base frame, one per map cell) and their
+  // normals, moved into the first view's base frame; a cell seen by an earlier view keeps that one.
   const double r = settings_.map.resolution;
-  const std::vector<Vector2d> scan = band_scan(frame, T_base_lidar.cast<float>(), settings_, r);
-  const std::vector<Vector2d> normals = scan_normals(scan, T_base_lidar.translation().head<2>(), 3.0 * r);
+  const Vector2d sensor = T_base_lidar.translation().head<2>();
+  BandScan scan;
+  std::unordered_set<std::uint64_t> taken;
+  for (std::size_t v = 0; v < views.size(); ++v) {
+    const std::vector<Vector2d> pts = band_scan(*views[v].frame, T_base_lidar.cast<float>(), settings_, r);
+    const std::vector<Vector2d> nrm = scan_normals(pts, sensor, 3.0 * r);
+    const Pose2 motion = Pose2::from_isometry(views[v].T_base0_base);
+    const Eigen::Matrix2d R = Eigen::Rotation2Dd(motion.theta).toRotationMatrix();
+    const Vector2d t(motion.x, motion.y);
+    const bool first = v == 0;  // the first view's points stay as they are (bit for bit)
+    scan.sensors.push_back(first ? sensor : Vector2d(R * sensor + t));
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const Vector2d p = first ? pts[i] : Vector2d(R * pts[i] + t);
+      if (!first && !taken.insert(cell_key(cell_of(p.x(), r), cell_of(p.y(), r))).second) continue;
+      if (first && views.size() > 1) taken.insert(cell_key(cell_of(p.x(), r), cell_of(p.y(), r)));
+      scan.points.push_back(p);
+      scan.normals.push_back(first ? nrm[i] : Vector2d(R * nrm[i]));
+      scan.view.push_back(v);
+    }
+  }
 
   // The 2D search over every storey: the best pose and the best one away from it.
-  const Vector2d sensor = T_base_lidar.translation().head<2>();
-  const StoreySearch found = search_storeys(scan, normals, sensor, hint, hint_radius, out);
+  const StoreySearch found = search_storeys(scan, hint, hint_radius, out);
   out.seconds_search = seconds_since(t0);
   if (!found.any_data) {
     out.status = Status::kInsufficientData;
@@ -378,21 +442,23 @@ BimLocalization BimLocalizer::localize(const PointCloud& frame, const Eigen::Iso
   if (found.second_map) out.T_world_base_second = base_pose(found.second_pose, found.second_map->floor_z);
   const bool close_scores = found.second_map && found.second >= (1.0 - settings_.ambiguity_margin) * found.best;
 
-  // The 3D refinement of the best pose (and of the second when the scores are close).
+  // The 3D refinement of the best pose (and of the second when the scores are close), with the
+  // first frame: it is where the result is, and the views' points carry the drift of their motion.
   const auto t1 = std::chrono::steady_clock::now();
+  const PointCloud& frame = *views[0].frame;
   PointCloud without_floor;
   const PointCloud* result_frame = refine_found(frame, T_base_lidar, found, close_scores, without_floor, out);
   out.refine_starts = 1;
   const bool hinted_weak = hint && out.score >= settings_.min_score_hinted && out.score < settings_.min_score;
   // (An ambiguous result is rejected whatever its overlap: no retry.)
   if (hinted_weak && !out.ambiguous && settings_.retry_shift > 0.0 && out.fine.overlap < settings_.min_overlap_hinted) {
-    retry_refinement(*result_frame, T_base_lidar, normals, out);
+    retry_refinement(*result_frame, T_base_lidar, scan.normals, out);
   }
   out.T_world_base = out.fine.T_target_source * T_base_lidar.inverse();
   out.seconds_fine = seconds_since(t1);
 
   // The gates: score, ambiguity, truncated search, shift of the refinement, see-through.
-  apply_gates(scan, sensor, found, hinted_weak, out);
+  apply_gates(scan, found, hinted_weak, out);
   return out;
 }
 

@@ -5,6 +5,7 @@
 // as JSON, CSV, a floor plan SVG and a BCF archive that validates against the BCF 2.1 schemas.
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -183,6 +184,34 @@ std::string bcf_viewpoints(const std::string& bcf, std::size_t& topics) {
 // grey (dashed) for the unobserved ones; the BCF validates and has one topic per deviating row,
 // selecting that row's GlobalId. With a tolerance nothing exceeds, the BCF is still written, valid,
 // without topics. A user's deviations.bcf in OUT is refused and left as it was.
+// The duplex's two flats are the same flat turned half a turn: a start inside one cannot be told
+// from the same spot in the other, however far the robot drives in it. The run says so, names both
+// places and asks for a hint; with the hint it runs.
+TEST_F(CliTest, RunWithAStartThatFitsTwoPlacesNamesBothAndTakesAHint) {
+  PLUMB_REQUIRE_DATA(duplex, "ifc/buildings/duplex.ifc");
+  const std::string dir = test::temp_path("cli_run_twin_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  ASSERT_EQ(run_cli("simulate '" + duplex + "' -o '" + dir + "' --length 5 --seed 1").exit_code, 0);
+  const std::string out = dir + "_out";
+  test::RunResult r = run_cli("run '" + dir + "' --bim '" + duplex + "' -o '" + out + "'");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("fits two places"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--start-hint"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("m driven"), std::string::npos) << r.err;  // it drove on before giving up
+  EXPECT_FALSE(std::filesystem::exists(out + "/bim.tum"));
+  // The true start (gt.tum) rounded to the metre is a hint a site engineer can give.
+  std::ifstream gt(dir + "/gt.tum");
+  std::string comment;
+  double stamp = 0.0, x = 0.0, y = 0.0;
+  ASSERT_TRUE(std::getline(gt, comment) && gt >> stamp >> x >> y);
+  r = run_cli("run '" + dir + "' --bim '" + duplex + "' -o '" + out + "' --start-hint " + std::to_string(std::round(x)) +
+              " " + std::to_string(std::round(y)));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(out + "/bim.tum"));
+  std::filesystem::remove_all(dir);
+  std::filesystem::remove_all(out);
+}
+
 TEST_F(CliTest, RunAsBuiltWritesTheFourDeviationFilesAndKeepsAUsersOwn) {
   const std::string dump_dir = simulate_demo_dump("cli_run_as_built_dump", 4.0);
   const std::string out = dump_dir + "_out";

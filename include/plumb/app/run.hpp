@@ -36,6 +36,13 @@ struct RunSettings {
   /// starts in: the localization only considers poses within start_hint_radius of it.
   std::optional<Eigen::Vector3d> start_hint;
   double start_hint_radius = 3.0;   ///< [m]
+  /// When the first frame alone is not localized (look-alike rooms, mirrored flats, a frame facing
+  /// open space or a crowd), the robot's next frames are added, one every start_view_spacing of the
+  /// front end's path, and the first frame is localized again from all of them (BimLocalizer with
+  /// LocalizerView), until it is or the front end has covered start_search_distance; the
+  /// trajectory still starts at frame 0. 0 = the first frame alone decides. [m]
+  double start_search_distance = 15.0;
+  double start_view_spacing = 1.0;  ///< [m], > 0
   bool deskew = true;               ///< undo motion distortion with the wheel odometry and per-point times
   std::size_t max_frames = 0;       ///< 0 = all
   /// Construction tolerance the as-built deviations are judged against (odometry.estimate_as_built) [m].
@@ -71,7 +78,12 @@ struct RunReport {
   std::size_t odometry_clamped_frames = 0;
   bool localized = false;               ///< the initial pose came from BimLocalizer
   Status localization_status = Status::kOk;
-  BimLocalization localization;         ///< when localized
+  BimLocalization localization;         ///< when localized: the last try (views: the frames it used)
+  double localization_distance = 0.0;  ///< front-end path from frame 0 to the last view used [m]
+  /// When the localization failed and some try found two places fitting about as well: the last
+  /// such try (its T_world_base_search and T_world_base_second are the two places).
+  std::optional<BimLocalization> ambiguous_localization;
+  std::size_t localization_frames = 0;  ///< frames read to localize (1: the first frame decided)
   Eigen::Isometry3d T_world_base0 = Eigen::Isometry3d::Identity();
   std::size_t bim_points = 0;
   std::size_t anchors_accepted = 0, anchors_rejected = 0, anchors_attempted = 0;

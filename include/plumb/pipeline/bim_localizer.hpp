@@ -20,6 +20,14 @@
 ///     2022, sec. 1.3 (refine_localization());
 ///  4. gates: a score too low (the frame is not from this building), a second place scoring
 ///     almost as well (ambiguous: give a start hint), or an ICP that fails or moves far.
+///
+/// A single frame cannot tell look-alike rooms or mirrored flats apart; a robot that drives a few
+/// metres can. localize() therefore also takes several frames with their motion relative to the
+/// first (LocalizerView, e.g. the front end's chained scan matches): their band points together
+/// form one wider 2D scan, searched as above; the 3D refinement uses all of them; the result is the
+/// first frame's pose. The search stays exhaustive, so unlike a filter over the first frame's best
+/// few places it cannot lose the true place because the first frame scored it low (furniture, a
+/// person in front of the LiDAR).
 
 #include <cstddef>
 #include <memory>
@@ -129,8 +137,17 @@ struct BimLocalization {
   IcpResult fine;                  ///< the 3D refinement (overlap, rmse, degeneracy)
   int refine_starts = 0;           ///< 3D refinements of the result (1, or 3 with the retry)
   std::size_t num_points = 0;      ///< frame points in the 2D search
+  std::size_t views = 0;           ///< frames the result was found from (LocalizerView)
   std::size_t nodes_scored = 0;    ///< branch-and-bound nodes over all storeys
   double seconds_search = 0.0, seconds_fine = 0.0;
+};
+
+/// @brief One frame of a localization from several frames (BimLocalizer::localize()).
+struct LocalizerView {
+  const PointCloud* frame = nullptr;  ///< LiDAR frame (deskewed), not owned
+  /// The base at this frame in the base frame of the first view (level motion: z, roll and pitch
+  /// are ignored), e.g. the front end's chained motion. Identity for the first view.
+  Eigen::Isometry3d T_base0_base = Eigen::Isometry3d::Identity();
 };
 
 /// @brief Finds LiDAR frames in a building (see the file comment). Build once per model.
@@ -145,6 +162,16 @@ class BimLocalizer {
   /// @param hint  rough base position (x, y in the BIM frame): only poses within hint_radius count
   /// @throws plumb::Error for inconsistent cloud fields, a non-finite extrinsic or a bad hint
   BimLocalization localize(const PointCloud& frame, const Eigen::Isometry3d& T_base_lidar,
+                           const std::optional<Vector2d>& hint = std::nullopt, double hint_radius = 3.0) const;
+
+  /// @brief Localize the first of several frames from all of them (see the file comment): the
+  ///        result's poses are those of views[0]'s base. One view gives the result of the
+  ///        single-frame localize() bit for bit. The drift of the views' relative motion should stay
+  ///        well under the grid resolution (10 cm): a front end over some metres, not wheel odometry
+  ///        over a long drive.
+  /// @throws plumb::Error for no view, a null or inconsistent frame, a non-finite motion or
+  ///         extrinsic, or a bad hint
+  BimLocalization localize(const std::vector<LocalizerView>& views, const Eigen::Isometry3d& T_base_lidar,
                            const std::optional<Vector2d>& hint = std::nullopt, double hint_radius = 3.0) const;
 
   /// @brief Storeys searched (BimMesh::storeys indices) and their floor heights.
@@ -171,9 +198,15 @@ class BimLocalizer {
     bool any_data = false;   ///< some storey had enough points to search
     bool truncated = false;  ///< some storey's search gave up on poses seeing through walls
   };
-  /// Searches every storey's map for the band points `scan` (counts go into `out`).
-  StoreySearch search_storeys(const std::vector<Vector2d>& scan, const std::vector<Vector2d>& normals,
-                              const Vector2d& sensor, const std::optional<Vector2d>& hint, double hint_radius,
+  /// The views' points in the height band, in the first view's base frame, one per map cell, with
+  /// their normals and the sensor position they were seen from.
+  struct BandScan {
+    std::vector<Vector2d> points, normals;
+    std::vector<std::size_t> view;  ///< the view each point comes from
+    std::vector<Vector2d> sensors;  ///< per view, in the first view's base frame
+  };
+  /// Searches every storey's map for the band points (counts go into `out`).
+  StoreySearch search_storeys(const BandScan& scan, const std::optional<Vector2d>& hint, double hint_radius,
                               BimLocalization& out) const;
   /// Refines out.T_world_base_search in 3D into out.fine, and the second pose too when `close_scores`
   /// (the higher overlap wins); returns the frame the result was refined with (`frame`, or it
@@ -186,8 +219,7 @@ class BimLocalizer {
   void retry_refinement(const PointCloud& result_frame, const Eigen::Isometry3d& T_base_lidar,
                         const std::vector<Vector2d>& normals, BimLocalization& out) const;
   /// Sets out.see_through, out.truncated and out.status from the gates of BimLocalizerSettings.
-  void apply_gates(const std::vector<Vector2d>& scan, const Vector2d& sensor, const StoreySearch& found,
-                   bool hinted_weak, BimLocalization& out) const;
+  void apply_gates(const BandScan& scan, const StoreySearch& found, bool hinted_weak, BimLocalization& out) const;
 
   BimLocalizerSettings settings_;
   std::vector<StoreyMap> maps_;
