@@ -224,6 +224,9 @@ double half_turn_congruence(const std::string& name) {
 TEST(BimLocalizerDriveOtherTest, TheDuplexFlatsAreOneDesignTurnedHalfATurn) {
   PLUMB_REQUIRE_DATA(fzk, "ifc/buildings/AC20-FZK-Haus.ifc");
   PLUMB_REQUIRE_DATA(duplex, "ifc/buildings/duplex.ifc");
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "a property of the models, not of the code: release builds";
+#endif
   EXPECT_GT(half_turn_congruence("duplex"), 0.99);
   EXPECT_LT(half_turn_congruence("AC20-FZK-Haus"), 0.95);
 }
