@@ -76,10 +76,12 @@ bool right(const Eigen::Isometry3d& T_world_base, const Eigen::Isometry3d& truth
   return d.translation().head<2>().norm() < 0.05 && Eigen::AngleAxisd(d.linear()).angle() < 0.5 * M_PI / 180.0;
 }
 
-void bm_plumb(benchmark::State& state) {
+void bm_plumb_threads(benchmark::State& state, int threads) {
   const Data& d = data();
   if (!d.ok) return state.SkipWithError("AC20-FZK-Haus.ifc missing (PLUMB_DATA_DIR)");
-  const plumb::BimLocalizer localizer(*d.mesh, d.bim_cloud);
+  plumb::BimLocalizerSettings settings;
+  settings.threads = threads;
+  const plumb::BimLocalizer localizer(*d.mesh, d.bim_cloud, settings);
   std::size_t k = 0, found = 0, runs = 0;
   for (auto _ : state) {
     const plumb::BimLocalization r = localizer.localize(d.frames[k], d.T_base_lidar);
@@ -89,6 +91,8 @@ void bm_plumb(benchmark::State& state) {
   }
   state.counters["found"] = static_cast<double>(found) / static_cast<double>(runs);
 }
+
+void bm_plumb(benchmark::State& state) { bm_plumb_threads(state, 1); }
 
 void bm_plumb_sacia_threads(benchmark::State& state, int threads) {
   const Data& d = data();
@@ -161,6 +165,7 @@ void bm_open3d(benchmark::State& state) {
 int main(int argc, char** argv) {
   plumb::bench::single_thread_openmp();
   benchmark::RegisterBenchmark("bim_localize/plumb/fzk_haus", bm_plumb)->Unit(benchmark::kMillisecond)->Iterations(10);
+  plumb::bench::register_threads("bim_localize/plumb/fzk_haus", bm_plumb_threads);
   benchmark::RegisterBenchmark("bim_localize/plumb_sacia/fzk_haus", bm_plumb_sacia)
       ->Unit(benchmark::kMillisecond)
       ->Iterations(5);

@@ -59,6 +59,7 @@ void run(const RunOptions& o) {
   settings.odometry.use_bim = !o.no_bim;
   settings.odometry.correct_every = o.correct_every;
   settings.odometry.threads = resolve_thread_count(o.threads);
+  settings.localizer.threads = settings.odometry.threads;
   settings.odometry.estimate_as_built = o.as_built;
   settings.deviation_tolerance = o.tolerance;
   settings.odometry.as_built.sigma_translation = o.as_built_sigma;

@@ -134,7 +134,8 @@ void bind_bim_localizer(py::module_& m) {
       .def_readwrite("min_score_hinted", &BimLocalizerSettings::min_score_hinted)
       .def_readwrite("min_overlap_hinted", &BimLocalizerSettings::min_overlap_hinted)
       .def_readwrite("ambiguity_margin", &BimLocalizerSettings::ambiguity_margin)
-      .def_readwrite("max_refine_shift", &BimLocalizerSettings::max_refine_shift);
+      .def_readwrite("max_refine_shift", &BimLocalizerSettings::max_refine_shift)
+      .def_readwrite("threads", &BimLocalizerSettings::threads);
   py::class_<BimLocalization> r(m, "BimLocalization", "Where BimLocalizer.localize() placed a frame.");
   r.def_readonly("status", &BimLocalization::status)
       .def_readonly("storey", &BimLocalization::storey)

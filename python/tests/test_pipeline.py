@@ -142,5 +142,9 @@ def test_localize_views_of_one_frame_equals_localize_and_more_frames_agree(sim_r
     three = localizer.localize_views([frames[i] for i in (0, 10, 20)], motions, T_base_lidar)
     assert three.views == 3 and three.status == plumb.Status.ok
     assert np.linalg.norm(three.T_world_base[:2, 3] - gt.poses[0][:2, 3]) < 0.15
+    threaded = plumb.BimLocalizer(mesh, bim_cloud, threads=2)
+    again = threaded.localize_views([frames[i] for i in (0, 10, 20)], motions, T_base_lidar)
+    np.testing.assert_array_equal(again.T_world_base, three.T_world_base)
+    assert again.score == three.score and again.second_score == three.second_score
     with pytest.raises(Exception, match="motions"):
         localizer.localize_views(frames[:2], [np.eye(4)], T_base_lidar)

@@ -158,6 +158,7 @@ void check_settings(const BimLocalizerSettings& s) {
               "BimLocalizer: max_refine_shift = " << s.max_refine_shift << " must be > 0");
   PLUMB_CHECK(std::isfinite(s.retry_shift) && s.retry_shift >= 0.0,
               "BimLocalizer: retry_shift = " << s.retry_shift << " must be >= 0");
+  PLUMB_CHECK(s.threads >= 0, "BimLocalizer: threads = " << s.threads << " must be >= 0 (0 = every core)");
 }
 
 }  // namespace
@@ -166,6 +167,7 @@ BimLocalizer::BimLocalizer(const bim::BimMesh& mesh, const PointCloud& bim_cloud
     : settings_(settings) {
   const auto t0 = std::chrono::steady_clock::now();
   check_settings(settings_);
+  settings_.fine.threads = settings_.threads;
   bim_cloud.check_consistent("BimLocalizer: BIM cloud");
   PLUMB_CHECK(bim_cloud.has_normals(), "BimLocalizer: the BIM cloud has no normals (use sample_bim_cloud())");
   PLUMB_CHECK(!mesh.storeys.empty(), "BimLocalizer: the model has no storey");
@@ -246,6 +248,7 @@ BimLocalizer::StoreySearch BimLocalizer::search_storeys(const BandScan& scan, co
                                                          double hint_radius, BimLocalization& out) const {
   CorrelativeSearchSettings ss;
   ss.max_points = settings_.max_points;
+  ss.threads = settings_.threads;
   // With a hint, a weaker 2D match may still be confirmed in 3D (see min_score_hinted).
   const double min_score = hint ? std::min(settings_.min_score, settings_.min_score_hinted) : settings_.min_score;
   ss.min_score = min_score * (1.0 - settings_.ambiguity_margin);  // a second pose below this cannot matter

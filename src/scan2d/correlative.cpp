@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 
 #include "plumb/core/error.hpp"
+#include "plumb/core/parallel.hpp"
 
 namespace plumb {
 namespace {
@@ -266,6 +267,7 @@ void check_search_settings(const CorrelativeSearchSettings& s, std::size_t num_p
   PLUMB_CHECK(s.max_points > 0, "CorrelativeMap2D::match: max_points must be > 0");
   PLUMB_CHECK(std::isfinite(s.second_distance) && std::isfinite(s.second_angle) && s.second_angle >= 0.0,
               "CorrelativeMap2D::match: second_distance / second_angle must be finite, the angle >= 0");
+  PLUMB_CHECK(s.threads >= 0, "CorrelativeMap2D::match: threads = " << s.threads << " must be >= 0 (0 = every core)");
 }
 
 /// Scan points with the angle of their normal (NaN when unknown).
@@ -303,12 +305,21 @@ ScanWithNormals thin_scan(const std::vector<Vector2d>& scan_in, const std::vecto
 
 /// One branch-and-bound search's state: the best leaf so far and its score, the floor a node must
 /// beat.
+/// A single pose a search tested (CorrelativeSearchSettings::accept), in the order it did.
+struct Visit {
+  Node node;
+  bool accepted = false;
+};
+
 struct Search {
   Node best;
   bool found = false;
   long floor_score;
   std::size_t rejected = 0;
   bool stopped = false;  ///< max_rejections reached
+  std::size_t scored = 0;  ///< windows and poses scored
+  /// Set: the search records every pose it tests, for Matcher::replay().
+  std::vector<Visit>* record = nullptr;
 };
 
 }  // namespace
@@ -347,7 +358,8 @@ class CorrelativeMap2D::Matcher {
     const long threshold = static_cast<long>(std::ceil(s_.min_score * static_cast<double>(scale)));
     Search first;
     first.floor_score = threshold - 1;
-    descend(roots, first, {});
+    descend_roots(roots, first, {});
+    scored_ += first.scored;
     out.rejected = first.rejected;
     out.truncated = first.stopped;
     if (!first.found) {
@@ -368,7 +380,8 @@ class CorrelativeMap2D::Matcher {
       };
       Search second;
       second.floor_score = threshold - 1;
-      descend(roots, second, excluded);
+      descend_roots(roots, second, excluded);
+      scored_ += second.scored;
       out.rejected += second.rejected;
       out.truncated = out.truncated || second.stopped;
       if (second.found) {
@@ -440,9 +453,9 @@ class CorrelativeMap2D::Matcher {
     }
   }
 
-  /// The score bound of heading `a` over the level-h window at (jx, jy).
-  long bound(int a, int jx, int jy, int h) {
-    ++scored_;
+  /// The score bound of heading `a` over the level-h window at (jx, jy); counts into `scored`.
+  long bound(int a, int jx, int jy, int h, std::size_t& scored) const {
+    ++scored;
     const std::uint8_t* v = map_.levels_[static_cast<std::size_t>(h)].value.data();
     long sum = 0;
     const Extent& e = extents_[static_cast<std::size_t>(a)];
@@ -480,27 +493,92 @@ class CorrelativeMap2D::Matcher {
     return std::abs(wrap_angle(angles_[static_cast<std::size_t>(a)] - theta));
   }
 
-  /// The top-level windows of every heading, best first.
+  /// The top-level windows of every heading, best first (scored on the search's threads, in
+  /// chunks of headings fixed by their number, appended in heading order).
   std::vector<Node> root_nodes() {
     const int top = map_.settings_.levels - 1;
     const int top_size = 1 << top;
+    const std::size_t grain = 16;
+    std::vector<std::size_t> scored(chunk_count(angles_.size(), grain), 0);
     std::vector<Node> roots;
-    for (std::size_t a = 0; a < angles_.size(); ++a) {
-      for (int jy = jy0_; jy <= jy1_; jy += top_size) {
-        for (int jx = jx0_; jx <= jx1_; jx += top_size) {
-          const bool allowed = map_.levels_[static_cast<std::size_t>(top)].allowed[map_.index(jx, jy)] != 0;
-          if (!allowed || !in_region(jx, jy, top_size)) continue;
-          roots.push_back({static_cast<int>(a), jx, jy, top, bound(static_cast<int>(a), jx, jy, top)});
+    parallel_append(s_.threads, angles_.size(), grain, roots, [&](std::size_t begin, std::size_t end, std::vector<Node>& out) {
+      std::size_t& count = scored[begin / grain];
+      for (std::size_t a = begin; a < end; ++a) {
+        for (int jy = jy0_; jy <= jy1_; jy += top_size) {
+          for (int jx = jx0_; jx <= jx1_; jx += top_size) {
+            const bool allowed = map_.levels_[static_cast<std::size_t>(top)].allowed[map_.index(jx, jy)] != 0;
+            if (!allowed || !in_region(jx, jy, top_size)) continue;
+            out.push_back({static_cast<int>(a), jx, jy, top, bound(static_cast<int>(a), jx, jy, top, count)});
+          }
         }
       }
-    }
+    });
+    for (const std::size_t c : scored) scored_ += c;
     std::sort(roots.begin(), roots.end(), by_score);
     return roots;
   }
 
+  /// descend() over the sorted roots. With threads, the roots are taken in batches of a fixed size:
+  /// each root of a batch is searched on its own (in parallel) from the floor the batch starts
+  /// with, recording every pose it tests; replay() then walks the records in root order with the
+  /// floor a serial search would have had. A subtree searched from a lower floor tests every pose
+  /// the serial search tests there (and more), so the replay gives its best pose, its rejections and
+  /// its stop exactly: the results do not depend on the thread count. (The windows scored do.)
+  void descend_roots(const std::vector<Node>& roots, Search& search, const Exclusion& excluded) const {
+    if (resolve_thread_count(s_.threads) == 1) {
+      descend(roots, search, excluded);
+      return;
+    }
+    constexpr std::size_t kBatch = 32;
+    for (std::size_t b = 0; b < roots.size() && !search.stopped; b += kBatch) {
+      if (roots[b].score <= search.floor_score) return;
+      const std::size_t e = std::min(roots.size(), b + kBatch);
+      std::vector<Search> local(e - b);
+      std::vector<std::vector<Visit>> visits(e - b);
+      parallel_chunks(s_.threads, e - b, [&](std::size_t k) {
+        if (roots[b + k].score <= search.floor_score) return;
+        local[k].floor_score = search.floor_score;
+        local[k].record = &visits[k];
+        descend({roots[b + k]}, local[k], excluded);
+      });
+      for (std::size_t k = 0; k < e - b; ++k) {
+        search.scored += local[k].scored;
+        if (roots[b + k].score <= search.floor_score || search.stopped) return;
+        replay(visits[k], local[k].stopped, roots[b + k], search, excluded);
+      }
+    }
+  }
+
+  /// The effect on `search` of a serial descend() into `root`, from the poses a search of it from a
+  /// lower floor tested (`visits`, in order). `cut`: that search stopped at max_rejections before
+  /// it ended; if the serial one would go on, the root is searched again serially.
+  void replay(const std::vector<Visit>& visits, bool cut, const Node& root, Search& search,
+              const Exclusion& excluded) const {
+    const Search before = search;
+    for (const Visit& v : visits) {
+      if (v.node.score <= search.floor_score) continue;
+      if (!v.accepted) {
+        if (++search.rejected == s_.max_rejections) {
+          search.stopped = true;
+          return;
+        }
+        continue;
+      }
+      search.best = v.node;
+      search.found = true;
+      search.floor_score = v.node.score;
+    }
+    if (cut) {
+      const std::size_t scored = search.scored;
+      search = before;
+      search.scored = scored;
+      descend({root}, search, excluded);
+    }
+  }
+
   // Depth-first branch and bound, children best first. `excluded(node, size)` prunes windows (and
   // leaves) that lie wholly inside the exclusion zone of the second search.
-  void descend(const std::vector<Node>& nodes, Search& search, const Exclusion& excluded) {
+  void descend(const std::vector<Node>& nodes, Search& search, const Exclusion& excluded) const {
     for (const Node& node : nodes) {
       if (node.score <= search.floor_score || search.stopped) return;  // sorted: nothing after can beat it
       const int size = 1 << node.h;
@@ -517,7 +595,7 @@ class CorrelativeMap2D::Matcher {
         if (jx > jx1_ || jy > jy1_) continue;
         const bool allowed = map_.levels_[static_cast<std::size_t>(node.h - 1)].allowed[map_.index(jx, jy)] != 0;
         if (!allowed || !in_region(jx, jy, half)) continue;
-        children.push_back({node.a, jx, jy, node.h - 1, bound(node.a, jx, jy, node.h - 1)});
+        children.push_back({node.a, jx, jy, node.h - 1, bound(node.a, jx, jy, node.h - 1, search.scored)});
       }
       std::sort(children.begin(), children.end(), by_score);
       descend(children, search, excluded);
@@ -531,10 +609,14 @@ class CorrelativeMap2D::Matcher {
     if (s_.region_center && (translation(node.jx, node.jy) - *s_.region_center).norm() > s_.region_radius) return;
     if (s_.accept) {
       const Vector2d t = translation(node.jx, node.jy);
-      if (!s_.accept(Pose2{t.x(), t.y(), wrap_angle(angles_[static_cast<std::size_t>(node.a)])})) {
+      const bool accepted = s_.accept(Pose2{t.x(), t.y(), wrap_angle(angles_[static_cast<std::size_t>(node.a)])});
+      if (search.record) search.record->push_back(Visit{node, accepted});
+      if (!accepted) {
         if (++search.rejected == s_.max_rejections) search.stopped = true;
         return;
       }
+    } else if (search.record) {
+      search.record->push_back(Visit{node, true});
     }
     search.best = node;
     search.found = true;

@@ -254,6 +254,37 @@ TEST(BimLocalizerDriveOtherTest, DrivesFromAnotherBuildingAreRejected) {
   EXPECT_EQ(confident, 0);
 }
 
+// The search's roots are split over threads and replayed in order, the refinement's ICP is
+// threaded: every field of the result is that of one thread (nodes_scored, the work, aside).
+TEST(BimLocalizerDriveOtherTest, ThreadsChangeNoResult) {
+  const DriveBuilding& office = drive_building("demo_office");
+  plumb::BimLocalizerSettings threaded = office.localizer->settings();
+  threaded.threads = 3;
+  const BimLocalizer three(*office.mesh, plumb::bim::sample_bim_cloud(*office.mesh, 0.05), threaded);
+  for (std::size_t k = 0; k < office.drives.size(); k += 5 * kDriveStride) {
+    const Drive& d = office.drives[k];
+    for (const std::size_t n : {std::size_t{1}, std::size_t{4}}) {
+      std::vector<LocalizerView> views;
+      for (std::size_t v = 0; v < std::min(n, d.frames.size()); ++v) views.push_back(LocalizerView{&d.frames[v], d.motion[v]});
+      const BimLocalization a = office.localizer->localize(views, office.T_base_lidar);
+      const BimLocalization b = three.localize(views, office.T_base_lidar);
+      EXPECT_EQ(a.status, b.status) << k << " " << n;
+      EXPECT_TRUE(a.T_world_base.isApprox(b.T_world_base, 0.0)) << k << " " << n;
+      EXPECT_TRUE(a.T_world_base_search.isApprox(b.T_world_base_search, 0.0)) << k << " " << n;
+      EXPECT_TRUE(a.T_world_base_second.isApprox(b.T_world_base_second, 0.0)) << k << " " << n;
+      EXPECT_EQ(a.score, b.score) << k << " " << n;
+      EXPECT_EQ(a.second_score, b.second_score) << k << " " << n;
+      EXPECT_EQ(a.ambiguous, b.ambiguous) << k << " " << n;
+      EXPECT_EQ(a.see_through, b.see_through) << k << " " << n;
+      EXPECT_EQ(a.rejected_by_free_space, b.rejected_by_free_space) << k << " " << n;
+      EXPECT_EQ(a.fine.overlap, b.fine.overlap) << k << " " << n;
+      EXPECT_EQ(a.second_overlap, b.second_overlap) << k << " " << n;
+    }
+  }
+  threaded.threads = -1;
+  EXPECT_THROW(BimLocalizer(*office.mesh, plumb::bim::sample_bim_cloud(*office.mesh, 0.2), threaded), plumb::Error);
+}
+
 TEST(BimLocalizerDriveOtherTest, BadViewsGiveAClearError) {
   const DriveBuilding& office = drive_building("demo_office");
   const BimLocalizer& loc = *office.localizer;

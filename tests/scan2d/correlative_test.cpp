@@ -4,6 +4,8 @@
 #include "plumb/scan2d/correlative.hpp"
 
 #include <cmath>
+#include <cstdint>
+#include <functional>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -172,6 +174,67 @@ TEST(CorrelativeMatchTest, AcceptTestSkipsPosesAndEqualsBruteForceOverTheRest) {
   EXPECT_EQ(none.status, plumb::Status::kRejected);
   EXPECT_TRUE(none.truncated);
   EXPECT_EQ(none.rejected, 50u);
+}
+
+// With threads the roots are searched in parallel batches and replayed in order: the best and the
+// second pose, the scores, the rejections and a stop at max_rejections are those of one thread.
+TEST(CorrelativeMatchTest, ThreadsChangeNoResult) {
+  std::vector<Vector2d> pts, normals;
+  floor_plan(pts, normals);
+  CorrelativeMapSettings ms;
+  ms.resolution = 0.1;
+  ms.levels = 5;
+  auto inside = [](const Vector2d& t) { return t.x() > 0.2 && t.x() < 7.8 && t.y() > 0.2 && t.y() < 4.8; };
+  const CorrelativeMap2D map(pts, ms, inside, normals);
+  plumb::Rng rng(9);
+  const Pose2 truth{2.33, 1.71, 0.6};
+  const std::vector<Vector2d> scan = scan_from(pts, truth, rng);
+  // Pure tests that turn down a third, or nine in ten, of the poses, scattered (a hash of the cell
+  // and heading).
+  auto hash = [](const Pose2& p) {
+    return static_cast<std::uint64_t>(std::llround(p.x * 10.0) * 73856093LL ^ std::llround(p.y * 10.0) * 19349663LL ^
+                                      std::llround(p.theta * 100.0) * 83492791LL);
+  };
+  auto scattered = [&](const Pose2& p) { return hash(p) % 3 != 0; };
+  auto mostly_not = [&](const Pose2& p) { return hash(p) % 10 == 0; };
+  auto far_from_truth = [&](const Pose2& p) { return (Vector2d(p.x, p.y) - Vector2d(truth.x, truth.y)).norm() >= 0.6; };
+  struct Variant {
+    std::function<bool(const Pose2&)> accept;
+    std::size_t max_rejections;
+  };
+  const std::vector<Variant> variants{{nullptr, 10000}, {far_from_truth, 10000}, {scattered, 10000}, {mostly_not, 10},
+                                      {[](const Pose2&) { return false; }, 50}};
+  for (std::size_t v = 0; v < variants.size(); ++v) {
+    CorrelativeSearchSettings ss;
+    ss.angular_step = 2.0 * M_PI / 90.0;
+    ss.max_points = 100000;
+    ss.accept = variants[v].accept;
+    ss.max_rejections = variants[v].max_rejections;
+    const plumb::CorrelativeResult one = map.match(scan, ss);
+    if (v == 3) {
+      EXPECT_TRUE(one.truncated) << "the stop at max_rejections is not exercised";
+      EXPECT_EQ(one.status, plumb::Status::kOk) << "a pose accepted before the stop is not exercised";
+    }
+    for (const int threads : {2, 3, 8}) {
+      ss.threads = threads;
+      const plumb::CorrelativeResult r = map.match(scan, ss);
+      EXPECT_EQ(r.status, one.status) << v << " " << threads;
+      EXPECT_EQ(r.score, one.score) << v << " " << threads;
+      EXPECT_EQ(r.pose.x, one.pose.x) << v << " " << threads;
+      EXPECT_EQ(r.pose.y, one.pose.y) << v << " " << threads;
+      EXPECT_EQ(r.pose.theta, one.pose.theta) << v << " " << threads;
+      EXPECT_EQ(r.has_second, one.has_second) << v << " " << threads;
+      EXPECT_EQ(r.second_score, one.second_score) << v << " " << threads;
+      EXPECT_EQ(r.second_pose.x, one.second_pose.x) << v << " " << threads;
+      EXPECT_EQ(r.second_pose.y, one.second_pose.y) << v << " " << threads;
+      EXPECT_EQ(r.second_pose.theta, one.second_pose.theta) << v << " " << threads;
+      EXPECT_EQ(r.rejected, one.rejected) << v << " " << threads;
+      EXPECT_EQ(r.truncated, one.truncated) << v << " " << threads;
+    }
+  }
+  CorrelativeSearchSettings bad;
+  bad.threads = -1;
+  EXPECT_THROW(map.match(scan, bad), plumb::Error);
 }
 
 TEST(CorrelativeMatchTest, NormalsKeepAWallsFarFaceFromExplainingItsNearFace) {

@@ -114,6 +114,9 @@ struct BimLocalizerSettings {
   /// points, at the search's pose) and goes on to the next best: a place that scores well only by
   /// looking through walls neither wins nor makes the result ambiguous. 0 = no test in the search.
   double search_see_through = 0.17;
+  /// Threads of the 2D search and of the 3D refinement (0 = every core); the result is the same for
+  /// any count (BimLocalization::nodes_scored, the work done, aside). `fine.threads` is overridden.
+  int threads = 1;
 };
 
 /// @brief Result of BimLocalizer::localize().

@@ -68,6 +68,10 @@ struct CorrelativeSearchSettings {
   /// At most this many poses rejected by `accept` per search (best, then second); after that the
   /// search ends with what it has (a frame that fits nowhere must not test every pose). 0 = no limit.
   std::size_t max_rejections = 10000;
+  /// Threads of the search (0 = every core). The result (poses, scores, rejections) is the same
+  /// for any count; only nodes_scored, the work done, differs. `accept` must then be safe to call
+  /// from several threads at once (a const test of the map is).
+  int threads = 1;
 };
 
 /// @brief Result of CorrelativeMap2D::match().
@@ -81,7 +85,7 @@ struct CorrelativeResult {
   double second_score = 0.0;   ///< its score, [0, 1]
   std::size_t num_points = 0;  ///< scan points used
   std::size_t num_angles = 0;  ///< headings searched
-  std::size_t nodes_scored = 0;  ///< branch-and-bound nodes scored (both searches)
+  std::size_t nodes_scored = 0;  ///< branch-and-bound nodes scored (both searches; depends on threads)
   std::size_t rejected = 0;    ///< poses CorrelativeSearchSettings::accept turned down (both searches)
   /// A search stopped at CorrelativeSearchSettings::max_rejections: `pose` and `second_pose` are
   /// the best found until then, not necessarily the best there are.
