@@ -165,7 +165,14 @@ void bm_open3d(benchmark::State& state) {
 int main(int argc, char** argv) {
   plumb::bench::single_thread_openmp();
   benchmark::RegisterBenchmark("bim_localize/plumb/fzk_haus", bm_plumb)->Unit(benchmark::kMillisecond)->Iterations(10);
-  plumb::bench::register_threads("bim_localize/plumb/fzk_haus", bm_plumb_threads);
+  // Five iterations, one per frame: every thread count times the same frames.
+  for (int threads : {1, 2, 4, 8}) {
+    benchmark::RegisterBenchmark(("bim_localize/plumb/fzk_haus/threads:" + std::to_string(threads)).c_str(),
+                                 bm_plumb_threads, threads)
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime()
+        ->Iterations(5);
+  }
   benchmark::RegisterBenchmark("bim_localize/plumb_sacia/fzk_haus", bm_plumb_sacia)
       ->Unit(benchmark::kMillisecond)
       ->Iterations(5);
