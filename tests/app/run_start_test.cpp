@@ -89,7 +89,7 @@ std::string BimOdometryStartTest::whole_;
 std::string BimOdometryStartTest::cut_;
 std::size_t BimOdometryStartTest::first_ = 0;
 
-double xy_error(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+double start_xy_error(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
   return (a.translation() - b.translation()).head<2>().norm();
 }
 
@@ -110,7 +110,7 @@ TEST_F(BimOdometryStartTest, AStartOneFrameCannotPlaceIsFoundByDrivingOn) {
   EXPECT_LT(r.initial_error_yaw_deg, 1.0);
   // The trajectory starts at frame 0 (the frames driven while localizing are back-filled).
   ASSERT_EQ(r.bim.size(), dump.num_frames());
-  EXPECT_LT(xy_error(r.bim.poses.front(), gt.poses.front()), 0.15);
+  EXPECT_LT(start_xy_error(r.bim.poses.front(), gt.poses.front()), 0.15);
   EXPECT_LT(r.max_error_bim, 0.15);
 
   // The first frame alone does not decide: without driving on, the run is not localized.
