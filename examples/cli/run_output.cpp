@@ -4,7 +4,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -16,6 +15,7 @@
 #include "plumb/app/deviation_files.hpp"
 #include "plumb/bim/sample.hpp"
 #include "plumb/core/error.hpp"
+#include "plumb/core/pose2.hpp"
 #include "plumb/io/svg.hpp"
 #include "plumb/io/trajectory.hpp"
 
@@ -325,8 +325,8 @@ void check_localized(const RunReport& r, const io::FrameDumpReader& dump, const 
       const BimLocalization& a = *r.ambiguous_localization;
       const auto place = [](const Eigen::Isometry3d& T) {
         std::ostringstream o;
-        o << "(" << T.translation().x() << ", " << T.translation().y() << ", heading "
-          << std::atan2(T.linear()(1, 0), T.linear()(0, 0)) * 180.0 / kPi << " deg)";
+        const Pose2 p = Pose2::from_isometry(T);
+        o << "(" << p.x << ", " << p.y << ", heading " << p.theta * 180.0 / kPi << " deg)";
         return o.str();
       };
       PLUMB_THROW(dump.dir() << ": the start fits two places of " << model_name << " about as well, "

@@ -419,8 +419,7 @@ BimLocalization BimLocalizer::localize(const std::vector<LocalizerView>& views, 
     scan.sensors.push_back(first ? sensor : Vector2d(R * sensor + t));
     for (std::size_t i = 0; i < pts.size(); ++i) {
       const Vector2d p = first ? pts[i] : Vector2d(R * pts[i] + t);
-      if (!first && !taken.insert(cell_key(cell_of(p.x(), r), cell_of(p.y(), r))).second) continue;
-      if (first && views.size() > 1) taken.insert(cell_key(cell_of(p.x(), r), cell_of(p.y(), r)));
+      if (!taken.insert(cell_key(cell_of(p.x(), r), cell_of(p.y(), r))).second) continue;  // (never in the first view)
       scan.points.push_back(p);
       scan.normals.push_back(first ? nrm[i] : Vector2d(R * nrm[i]));
       scan.view.push_back(v);

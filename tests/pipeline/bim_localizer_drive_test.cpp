@@ -19,6 +19,7 @@
 #include "plumb/bim/ifc.hpp"
 #include "plumb/bim/mesh.hpp"
 #include "plumb/core/error.hpp"
+#include "plumb/core/pose2.hpp"
 #include "plumb/core/rng.hpp"
 #include "plumb/pipeline/bim_localizer.hpp"
 #include "plumb/registration/icp.hpp"
@@ -116,8 +117,6 @@ const DriveBuilding& drive_building(const std::string& name) {
   return cache.emplace(name, std::move(b)).first->second;
 }
 
-double drive_yaw(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); }
-
 struct DriveTally {
   int tried = 0, found = 0, wrong = 0;
   int twin_missed = 0;  ///< drives not found whose last try did not name the true place among its two
@@ -139,7 +138,7 @@ DriveTally localize_drives(const std::string& name, const DriveBuilding& b) {
       views.push_back(LocalizerView{&d.frames[v], d.motion[v]});
       r = b.localizer->localize(views, b.T_base_lidar);
       const double e = (r.T_world_base.translation() - d.truth[0].translation()).head<2>().norm();
-      const double ey = std::abs(plumb::wrap_angle(drive_yaw(r.T_world_base) - drive_yaw(d.truth[0])));
+      const double ey = std::abs(plumb::wrap_angle(plumb::Pose2::from_isometry(r.T_world_base).theta - plumb::Pose2::from_isometry(d.truth[0]).theta));
       if (r.status != Status::kOk) continue;
       ++t.found;
       const bool right = e < 0.15 && ey < 1.0 * M_PI / 180.0;

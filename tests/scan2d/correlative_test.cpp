@@ -42,6 +42,17 @@ void floor_plan(std::vector<Vector2d>& pts, std::vector<Vector2d>& normals) {
   wall({1, 3.5}, {2.5, 3.5}, {0, -1});  // a cupboard
 }
 
+/// Translations at least 0.2 m inside the plan's outer walls.
+bool inside_plan(const Vector2d& t) { return t.x() > 0.2 && t.x() < 7.8 && t.y() > 0.2 && t.y() < 4.8; }
+
+/// The plan's map: 10 cm cells, windows up to 1.6 m.
+CorrelativeMapSettings plan_settings() {
+  CorrelativeMapSettings ms;
+  ms.resolution = 0.1;
+  ms.levels = 5;
+  return ms;
+}
+
 /// What a robot at `pose` in the left room sees: the wall points of the left room within 6 m,
 /// in the robot frame, with noise.
 std::vector<Vector2d> scan_from(const std::vector<Vector2d>& pts, const Pose2& pose, plumb::Rng& rng) {
@@ -57,11 +68,8 @@ std::vector<Vector2d> scan_from(const std::vector<Vector2d>& pts, const Pose2& p
 TEST(CorrelativeMatchTest, BranchAndBoundEqualsBruteForce) {
   std::vector<Vector2d> pts, normals;
   floor_plan(pts, normals);
-  CorrelativeMapSettings ms;
-  ms.resolution = 0.1;
-  ms.levels = 5;
-  auto inside = [](const Vector2d& t) { return t.x() > 0.2 && t.x() < 7.8 && t.y() > 0.2 && t.y() < 4.8; };
-  const CorrelativeMap2D map(pts, ms, inside);
+  const CorrelativeMapSettings ms = plan_settings();
+  const CorrelativeMap2D map(pts, ms, inside_plan);
   plumb::Rng rng(3);
   const Pose2 truth{2.33, 1.71, 0.6};
   const std::vector<Vector2d> scan = scan_from(pts, truth, rng);
@@ -81,7 +89,7 @@ TEST(CorrelativeMatchTest, BranchAndBoundEqualsBruteForce) {
     for (int jy = 0; jy < map.height(); ++jy) {
       for (int jx = 0; jx < map.width(); ++jx) {
         const Vector2d t = map.origin() + Vector2d(jx, jy) * ms.resolution;
-        if (!inside(t)) continue;
+        if (!inside_plan(t)) continue;
         const Pose2 p{t.x(), t.y(), theta};
         const double s = map.score(scan, p);
         all.emplace_back(s, p);
@@ -111,11 +119,8 @@ TEST(CorrelativeMatchTest, BranchAndBoundEqualsBruteForce) {
 TEST(CorrelativeMatchTest, AcceptTestSkipsPosesAndEqualsBruteForceOverTheRest) {
   std::vector<Vector2d> pts, normals;
   floor_plan(pts, normals);
-  CorrelativeMapSettings ms;
-  ms.resolution = 0.1;
-  ms.levels = 5;
-  auto inside = [](const Vector2d& t) { return t.x() > 0.2 && t.x() < 7.8 && t.y() > 0.2 && t.y() < 4.8; };
-  const CorrelativeMap2D map(pts, ms, inside);
+  const CorrelativeMapSettings ms = plan_settings();
+  const CorrelativeMap2D map(pts, ms, inside_plan);
   plumb::Rng rng(5);
   const Pose2 truth{2.33, 1.71, 0.6};
   const std::vector<Vector2d> scan = scan_from(pts, truth, rng);
@@ -144,7 +149,7 @@ TEST(CorrelativeMatchTest, AcceptTestSkipsPosesAndEqualsBruteForceOverTheRest) {
       for (int jx = 0; jx < map.width(); ++jx) {
         const Vector2d t = map.origin() + Vector2d(jx, jy) * ms.resolution;
         const Pose2 p{t.x(), t.y(), theta};
-        if (!inside(t) || !far_from_truth(p)) continue;
+        if (!inside_plan(t) || !far_from_truth(p)) continue;
         const double s = map.score(scan, p);
         all.emplace_back(s, p);
         if (s > best) {
@@ -181,11 +186,8 @@ TEST(CorrelativeMatchTest, AcceptTestSkipsPosesAndEqualsBruteForceOverTheRest) {
 TEST(CorrelativeMatchTest, ThreadsChangeNoResult) {
   std::vector<Vector2d> pts, normals;
   floor_plan(pts, normals);
-  CorrelativeMapSettings ms;
-  ms.resolution = 0.1;
-  ms.levels = 5;
-  auto inside = [](const Vector2d& t) { return t.x() > 0.2 && t.x() < 7.8 && t.y() > 0.2 && t.y() < 4.8; };
-  const CorrelativeMap2D map(pts, ms, inside, normals);
+  const CorrelativeMapSettings ms = plan_settings();
+  const CorrelativeMap2D map(pts, ms, inside_plan, normals);
   plumb::Rng rng(9);
   const Pose2 truth{2.33, 1.71, 0.6};
   const std::vector<Vector2d> scan = scan_from(pts, truth, rng);
