@@ -37,7 +37,8 @@ void bind_run_settings(py::module_& m) {
       .def_readwrite("start_search_distance", &RunSettings::start_search_distance)
       .def_readwrite("start_view_spacing", &RunSettings::start_view_spacing)
       .def_readwrite("deskew", &RunSettings::deskew)
-      .def_readwrite("max_frames", &RunSettings::max_frames);
+      .def_readwrite("max_frames", &RunSettings::max_frames)
+      .def_readwrite("deviation_tolerance", &RunSettings::deviation_tolerance);
   py::class_<ObservationRow>(m, "ObservationRow", "One row of Liu et al. 2022, Table 2.")
       .def_readonly("name", &ObservationRow::name)
       .def_readonly("frame", &ObservationRow::frame)
@@ -85,7 +86,9 @@ void bind_run_report(py::module_& m) {
       .def_readonly("max_error_bim", &RunReport::max_error_bim)
       .def_readonly("registrations", &RunReport::registrations)
       .def_readonly("registration_error_rms", &RunReport::registration_error_rms)
-      .def_readonly("registration_error_max", &RunReport::registration_error_max);
+      .def_readonly("registration_error_max", &RunReport::registration_error_max)
+      .def_readonly("deviations", &RunReport::deviations)
+      .def_readonly("deviation_tolerance", &RunReport::deviation_tolerance);
   def_pose(r, "T_world_base0", &RunReport::T_world_base0);
 }
 

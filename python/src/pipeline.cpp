@@ -9,6 +9,8 @@
 
 #include "convert.hpp"
 #include "plumb/core/error.hpp"
+#include "plumb/bim/mesh.hpp"
+#include "plumb/pipeline/as_built.hpp"
 #include "plumb/pipeline/bim_localizer.hpp"
 #include "plumb/pipeline/bim_odometry.hpp"
 #include "plumb/pipeline/hybrid_lio.hpp"
@@ -41,6 +43,39 @@ void bind_bim_odometry_types(py::module_& m) {
       .def_readonly("correction", &AnchorResult::correction)
       .def_readonly("inflated", &AnchorResult::inflated);
 
+  py::class_<AsBuiltSettings>(m, "AsBuiltSettings",
+                              "Settings of the as-built estimate (construction tolerance as the elements' prior, ...).")
+      .def(py::init<>())
+      .def_readwrite("sigma_translation", &AsBuiltSettings::sigma_translation)
+      .def_readwrite("sigma_rotation", &AsBuiltSettings::sigma_rotation)
+      .def_readwrite("point_sigma", &AsBuiltSettings::point_sigma)
+      .def_readwrite("max_points_per_element", &AsBuiltSettings::max_points_per_element)
+      .def_readwrite("pose_sigma_translation", &AsBuiltSettings::pose_sigma_translation)
+      .def_readwrite("pose_sigma_rotation", &AsBuiltSettings::pose_sigma_rotation)
+      .def_readwrite("max_residual", &AsBuiltSettings::max_residual)
+      .def_readwrite("outlier_distance", &AsBuiltSettings::outlier_distance)
+      .def_readwrite("junction_radius", &AsBuiltSettings::junction_radius)
+      .def_readwrite("decorrelation_distance", &AsBuiltSettings::decorrelation_distance);
+
+  py::enum_<DeviationStatus>(m, "DeviationStatus", "What the deviation report says of one element.")
+      .value("ok", DeviationStatus::kOk)
+      .value("deviates", DeviationStatus::kDeviates)
+      .value("unobserved", DeviationStatus::kUnobserved);
+  py::class_<DeviationReportRow>(m, "DeviationReportRow",
+                                 "One element of the deviation report (the rows of plumb run's deviations.csv).")
+      .def_readonly("element", &DeviationReportRow::element)
+      .def_readonly("global_id", &DeviationReportRow::global_id)
+      .def_readonly("type", &DeviationReportRow::type)
+      .def_readonly("name", &DeviationReportRow::name)
+      .def_readonly("storey", &DeviationReportRow::storey)
+      .def_readonly("observations", &DeviationReportRow::observations)
+      .def_readonly("normal", &DeviationReportRow::normal)
+      .def_readonly("point", &DeviationReportRow::point)
+      .def_readonly("offset_m", &DeviationReportRow::offset_m)
+      .def_readonly("sigma_m", &DeviationReportRow::sigma_m)
+      .def_readonly("rotation_deg", &DeviationReportRow::rotation_deg)
+      .def_readonly("status", &DeviationReportRow::status);
+
   py::class_<BimOdometrySettings> s(m, "BimOdometrySettings",
                                     "Settings of BimOdometry (the C++ defaults); the front end, segmentation and "
                                     "composer sub-settings keep their C++ defaults.");
@@ -67,7 +102,11 @@ void bind_bim_odometry_types(py::module_& m) {
       .def_readwrite("anchor_effective_points", &BimOdometrySettings::anchor_effective_points)
       .def_readwrite("anchor_rank_threshold", &BimOdometrySettings::anchor_rank_threshold)
       .def_readwrite("anchor_length", &BimOdometrySettings::anchor_length)
-      .def_readwrite("initial_covariance", &BimOdometrySettings::initial_covariance);
+      .def_readwrite("anchor_from_elements", &BimOdometrySettings::anchor_from_elements)
+      .def_readwrite("initial_covariance", &BimOdometrySettings::initial_covariance)
+      .def_readwrite("estimate_as_built", &BimOdometrySettings::estimate_as_built)
+      .def_readwrite("as_built", &BimOdometrySettings::as_built)
+      .def_readwrite("as_built_refresh_every", &BimOdometrySettings::as_built_refresh_every);
   def_pose(s, "T_base_lidar", &BimOdometrySettings::T_base_lidar, true);
 
   py::class_<BimFrameResult> r(m, "BimFrameResult", "What BimOdometry.process() did with one frame.");
@@ -82,6 +121,7 @@ void bind_bim_odometry_types(py::module_& m) {
       .def_readonly("anchor_dof", &BimFrameResult::anchor_dof)
       .def_readonly("registered", &BimFrameResult::registered)
       .def_readonly("anchor", &BimFrameResult::anchor)
+      .def_readonly("as_built_pairs", &BimFrameResult::as_built_pairs)
       .def_readonly("seconds_front_end", &BimFrameResult::seconds_front_end)
       .def_readonly("seconds_segment", &BimFrameResult::seconds_segment)
       .def_readonly("seconds_icp", &BimFrameResult::seconds_icp)
@@ -116,6 +156,18 @@ void bind_bim_odometry(py::module_& m) {
           "Process one LiDAR frame (sensor frame, deskewed to `stamp`) with the wheel-odometry pose (x, y, theta) "
           "of the base at its stamp: a BimFrameResult.")
       .def_property_readonly("pose", [](const BimOdometry& o) { return pose_to_array(o.pose()); })
+      .def(
+          "deviation_report",
+          [](const BimOdometry& o, const bim::BimMesh& mesh, double tolerance) {
+            PLUMB_CHECK(o.as_built() != nullptr,
+                        "BimOdometry.deviation_report: the odometry does not estimate the as-built "
+                        "(construct it with estimate_as_built=True)");
+            py::gil_scoped_release release;
+            return deviation_report(*o.as_built(), mesh, tolerance);
+          },
+          py::arg("mesh"), py::arg("tolerance") = 0.02,
+          "The as-built deviation report so far: a DeviationReportRow per element of the BIM cloud, judged "
+          "against `tolerance` [m]. `mesh` is the BimMesh the BIM cloud was sampled from.")
       .def_property_readonly("settings", &BimOdometry::settings);
 }
 

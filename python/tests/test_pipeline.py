@@ -84,6 +84,43 @@ def test_run_bim_odometry_settings_and_threads(sim_run, demo_model):
         plumb.run_bim_odometry(dump, mesh, max_frame=3)
 
 
+def test_as_built_deviations_equal_plumb_run(sim_run, run_cli, demo_model, building, tmp_path):
+    """The as-built estimate from Python: run_bim_odometry's deviation rows are `plumb run --as-built`'s
+    deviations.json, and BimOdometry fed frame by frame gives the same rows."""
+    dump_dir = sim_run[0]
+    done = run_cli("run", dump_dir, "--bim", demo_model, "-o", tmp_path / "cli", "--as-built", "--tolerance", 0.03)
+    assert done.returncode == 0, done.stderr
+    written = json.loads((tmp_path / "cli" / "deviations.json").read_text())
+    settings = plumb.RunSettings()
+    settings.deviation_tolerance = 0.03
+    settings.odometry.estimate_as_built = True
+    report = plumb.run_bim_odometry(plumb.FrameDump(dump_dir), plumb.read_ifc(demo_model), settings=settings)
+    assert report.deviation_tolerance == written["tolerance_m"] == 0.03
+    assert [r.global_id for r in report.deviations] == [e["global_id"] for e in written["elements"]]
+    for row, e in zip(report.deviations, written["elements"]):
+        assert row.status.name == e["status"] and row.observations == e["observations"]
+        assert row.offset_m == pytest.approx(e["offset_m"], abs=1e-9)
+        assert row.sigma_m == pytest.approx(e["sigma_m"], abs=1e-9)
+        np.testing.assert_allclose(row.normal, e["normal"], atol=1e-9)
+    assert sum(r.status != plumb.DeviationStatus.unobserved for r in report.deviations) > 0
+    assert sum(f.as_built_pairs for f in report.frames) > 0
+
+    # Frame by frame, from the same start: the same rows.
+    mesh, bim_cloud = building
+    dump = plumb.FrameDump(dump_dir)
+    odom = plumb.OdometryInterpolator(dump.odometry())
+    odometry = plumb.BimOdometry(bim_cloud, report.T_world_base0, T_base_lidar=dump.meta.T_base_lidar,
+                                 estimate_as_built=True)
+    for stamp, frame in dump:
+        odometry.process(plumb.deskew_frame(frame, stamp, dump.meta.T_base_lidar, odom), stamp, odom.at(stamp))
+    rows = odometry.deviation_report(mesh, tolerance=0.03)
+    assert [(r.global_id, r.status) for r in rows] == [(r.global_id, r.status) for r in report.deviations]
+    np.testing.assert_allclose([r.offset_m for r in rows], [r.offset_m for r in report.deviations], atol=1e-12)
+    # Without the estimate there is no report to give.
+    with pytest.raises(plumb.Error, match="estimate_as_built"):
+        plumb.BimOdometry(bim_cloud, report.T_world_base0).deviation_report(mesh)
+
+
 def cli_lio_settings(dump):
     """HybridLioSettings as `plumb lio` sets them by default (a map is started by 100 points or more)."""
     settings = plumb.HybridLioSettings()
