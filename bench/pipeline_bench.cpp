@@ -13,6 +13,10 @@
 // bim_odometry_frame/plumb_as_built/fzk_rfans32: the same with estimate_as_built (every accepted
 //   anchor's pairs into the AsBuiltMap, the registration target rebuilt from the elements as
 //   estimated every as_built_refresh_every anchors), so the difference is the as-built estimate's cost.
+// bim_odometry_frame/plumb_normal_matrix_weights/fzk_rfans32: the same as plumb/ with
+//   anchor_from_elements = false (each anchor's information from ICP's normal matrix, scaled, as
+//   for a BIM cloud without element labels), so the difference is the cost of weighing anchors by
+//   their elements.
 // No peer library implements this pipeline; its ICP is compared with PCL's and Open3D's in
 // plumb_registration_bench (icp/*), its kd-tree in plumb_search_bench.
 #include <benchmark/benchmark.h>
@@ -74,13 +78,15 @@ const IndoorRun& fzk_indoor() {
   return *run;
 }
 
-void BM_BimOdometryFrame(benchmark::State& state, bool use_bim, bool as_built, int threads = 1) {
+void BM_BimOdometryFrame(benchmark::State& state, bool use_bim, bool as_built, int threads = 1,
+                         bool from_elements = true) {
   const IndoorRun& run = fzk_indoor();
   BimOdometrySettings s;
   s.T_base_lidar = run.T_base_lidar;
   s.threads = threads;
   s.use_bim = use_bim;
   s.estimate_as_built = as_built;
+  s.anchor_from_elements = from_elements;
   std::unique_ptr<BimOdometry> odometry;
   std::size_t anchors = 0;
   auto restart = [&] { odometry = std::make_unique<BimOdometry>(use_bim ? run.bim_cloud : nullptr, run.T0, s); };
@@ -105,6 +111,9 @@ const bool kThreadsRegistered =
 BENCHMARK_CAPTURE(BM_BimOdometryFrame, fzk, true, false)->Name("bim_odometry_frame/plumb/fzk_rfans32")->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_BimOdometryFrame, fzk_as_built, true, true)
     ->Name("bim_odometry_frame/plumb_as_built/fzk_rfans32")
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_BimOdometryFrame, fzk_normal_matrix_weights, true, false, 1, false)
+    ->Name("bim_odometry_frame/plumb_normal_matrix_weights/fzk_rfans32")
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_BimOdometryFrame, fzk_front_end, false, false)
     ->Name("bim_odometry_frame/plumb_front_end/fzk_rfans32")
