@@ -92,8 +92,10 @@ struct BimOdometrySettings {
   /// and the information scaled as if at most this many key points were independent (as-built
   /// deviations of a wall are shared by all its points).
   double anchor_effective_points = 50.0;
-  /// Directions whose normalised information is below this fraction of the strongest get none.
-  double anchor_rank_threshold = 0.02;
+  /// Directions whose normalised information is below this fraction of the strongest get none. A
+  /// weak direction's information is already as small as the elements make it (a corridor's axis,
+  /// seen only through door reveals and the odd column), so only the nearly unconstrained are cut.
+  double anchor_rank_threshold = 0.002;
   double anchor_length = 5.0;        ///< L normalising rotation against translation in that test [m]
   /// The anchor's information from what limits it: every key point lies on an element of the model,
   /// and the element's own displacement from where the target cloud has it (the construction
