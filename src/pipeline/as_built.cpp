@@ -70,6 +70,26 @@ double ElementEstimate::face_offset_sigma() const {
   return displacement_sigma(face_point, face_normal);
 }
 
+std::vector<Vector3d> element_centroids(const PointCloud& cloud, std::vector<std::size_t>* counts) {
+  PLUMB_CHECK(cloud.has_labels(), "element_centroids: the cloud has no element labels");
+  std::int32_t max_label = -1;
+  for (std::int32_t l : cloud.labels) max_label = std::max(max_label, l);
+  const auto n = static_cast<std::size_t>(max_label + 1);
+  std::vector<Vector3d> centroid(n, Vector3d::Zero());
+  std::vector<std::size_t> count(n, 0);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (cloud.labels[i] < 0) continue;
+    const auto e = static_cast<std::size_t>(cloud.labels[i]);
+    centroid[e] += cloud.points[i].cast<double>();
+    ++count[e];
+  }
+  for (std::size_t e = 0; e < n; ++e) {
+    if (count[e] > 0) centroid[e] /= static_cast<double>(count[e]);
+  }
+  if (counts != nullptr) *counts = std::move(count);
+  return centroid;
+}
+
 AsBuiltMap::AsBuiltMap(const PointCloud& design, const AsBuiltSettings& settings) : settings_(settings) {
   const AsBuiltSettings& s = settings;
   PLUMB_CHECK(s.sigma_translation > 0.0 && s.sigma_rotation > 0.0 && std::isfinite(s.sigma_translation) &&
@@ -96,12 +116,8 @@ AsBuiltMap::AsBuiltMap(const PointCloud& design, const AsBuiltSettings& settings
     max_label = std::max(max_label, l);
   }
   elements_.resize(static_cast<std::size_t>(max_label + 1));
-  std::vector<std::size_t> count(elements_.size(), 0);
-  for (std::size_t i = 0; i < design.size(); ++i) {
-    const auto e = static_cast<std::size_t>(design.labels[i]);
-    elements_[e].pivot += design.points[i].cast<double>();
-    ++count[e];
-  }
+  std::vector<std::size_t> count;
+  const std::vector<Vector3d> centroid = element_centroids(design, &count);
   junction_.assign(design.size(), false);
   if (s.junction_radius > 0.0 && design.size() > 0) {
     const KdTree3f tree(design.points);
@@ -123,7 +139,7 @@ AsBuiltMap::AsBuiltMap(const PointCloud& design, const AsBuiltSettings& settings
   for (std::size_t e = 0; e < elements_.size(); ++e) {
     State& st = elements_[e];
     st.present = count[e] > 0;
-    if (st.present) st.pivot /= static_cast<double>(count[e]);
+    st.pivot = centroid[e];
   }
 }
 

@@ -135,20 +135,8 @@ BimOdometry::BimOdometry(std::shared_ptr<const PointCloud> bim_cloud, const Eige
       const AsBuiltSettings& ab = settings_.as_built;
       PLUMB_CHECK(ab.sigma_translation > 0.0 && ab.sigma_rotation > 0.0 && ab.point_sigma > 0.0,
                   "BimOdometry: as_built.sigma_translation, sigma_rotation and point_sigma must be > 0");
-      std::int32_t max_label = -1;
-      for (std::int32_t l : bim_->labels) max_label = std::max(max_label, l);
-      const auto n = static_cast<std::size_t>(max_label + 1);
-      element_pivot_.assign(n, Vector3d::Zero());
-      std::vector<std::size_t> count(n, 0);
-      for (std::size_t i = 0; i < bim_->size(); ++i) {
-        if (bim_->labels[i] < 0) continue;
-        const auto e = static_cast<std::size_t>(bim_->labels[i]);
-        element_pivot_[e] += bim_->points[i].cast<double>();
-        ++count[e];
-      }
-      for (std::size_t e = 0; e < n; ++e) {
-        if (count[e] > 0) element_pivot_[e] /= static_cast<double>(count[e]);
-      }
+      element_pivot_ = element_centroids(*bim_);
+      const std::size_t n = element_pivot_.size();
       Vector6d prior;
       prior << Vector3d::Constant(ab.sigma_translation * ab.sigma_translation),
           Vector3d::Constant(ab.sigma_rotation * ab.sigma_rotation);

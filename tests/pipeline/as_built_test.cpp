@@ -7,6 +7,7 @@
 // corrected cloud and the deviation report follow the estimate.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <random>
@@ -294,6 +295,32 @@ TEST(AsBuiltMapTest, DeviationReportJudgesOffsetsAgainstTheTolerance) {
   EXPECT_THROW(deviation_report(map, mesh, 0.0), Error);
   mesh.elements.pop_back();
   EXPECT_THROW(deviation_report(map, mesh, 0.01), Error);
+}
+
+TEST(AsBuiltMapTest, ElementCentroidsAreTheCentresOfTheirRectangles) {
+  PointCloud c = design_room();
+  const std::size_t floor_points = static_cast<std::size_t>(std::count(c.labels.begin(), c.labels.end(), kFloor));
+  // An unlabelled point far off and a label no point carries change nothing of the others.
+  c.points.emplace_back(100.0f, 100.0f, 100.0f);
+  c.normals.emplace_back(0.0f, 0.0f, 1.0f);
+  c.labels.push_back(-1);
+  c.labels[0] = kNumElements + 1;
+  std::vector<std::size_t> count;
+  const std::vector<Vector3d> centre = element_centroids(c, &count);
+  ASSERT_EQ(centre.size(), static_cast<std::size_t>(kNumElements + 2));
+  // Each element is a regular grid over its rectangle, so its centroid is the rectangle's centre
+  // (the floor lost its corner point to the extra label: about 1 / 3000 of a point off).
+  EXPECT_LT((centre[kSouth] - Vector3d(kLength / 2, 0, kHeight / 2)).norm(), 1e-5);
+  EXPECT_LT((centre[kEast] - Vector3d(kLength, kWidth / 2, kHeight / 2)).norm(), 1e-5);
+  EXPECT_LT((centre[kAway] - Vector3d(30, 2, kHeight / 2)).norm(), 1e-5);
+  EXPECT_LT((centre[kFloor] - Vector3d(kLength / 2, kWidth / 2, 0)).norm(), 0.01);
+  EXPECT_EQ(count[kFloor], floor_points - 1);
+  EXPECT_EQ(count[kNumElements], 0u);
+  EXPECT_TRUE(centre[kNumElements].isZero());
+  EXPECT_EQ(count[kNumElements + 1], 1u);
+  EXPECT_TRUE(centre[kNumElements + 1].isZero());  // the floor corner it took, at the origin
+  c.labels.clear();
+  EXPECT_THROW(element_centroids(c), Error);
 }
 
 TEST(AsBuiltMapTest, BadInputThrows) {

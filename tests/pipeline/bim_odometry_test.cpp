@@ -260,6 +260,17 @@ TEST(BimOdometryTest, BadInputThrows) {
   auto no_normals = std::make_shared<plumb::PointCloud>();
   for (int i = 0; i < 200; ++i) no_normals->points.emplace_back(float(i % 20), float(i / 20), 0.0f);
   EXPECT_THROW(plumb::BimOdometry(no_normals, Eigen::Isometry3d::Identity()), plumb::Error);
+  // Anchors weighed by their elements need positive tolerances (a zero one would claim an exact model).
+  auto labelled = std::make_shared<plumb::PointCloud>(*no_normals);
+  labelled->normals.assign(labelled->size(), Eigen::Vector3f::UnitZ());
+  labelled->labels.assign(labelled->size(), 0);
+  for (int which = 0; which < 3; ++which) {
+    plumb::BimOdometrySettings s;
+    (which == 0 ? s.as_built.sigma_translation : which == 1 ? s.as_built.sigma_rotation : s.as_built.point_sigma) = 0.0;
+    EXPECT_THROW(plumb::BimOdometry(labelled, Eigen::Isometry3d::Identity(), s), plumb::Error);
+    s.anchor_from_elements = false;
+    EXPECT_NO_THROW(plumb::BimOdometry(labelled, Eigen::Isometry3d::Identity(), s));
+  }
   plumb::BimOdometrySettings plain;
   plain.use_bim = false;
   plumb::BimOdometry odometry(nullptr, Eigen::Isometry3d::Identity(), plain);

@@ -49,6 +49,13 @@
 
 namespace plumb {
 
+/// @brief Centroid of each element's points in a labelled cloud: entry e is the mean of the points
+///        labelled e (zero for a label no point carries); points with a negative label are skipped.
+///        The pivot about which AsBuiltMap and the element-weighted anchors turn an element.
+/// @param counts when not null, receives the number of points of each element
+/// @throws plumb::Error when the cloud has no labels
+std::vector<Vector3d> element_centroids(const PointCloud& cloud, std::vector<std::size_t>* counts = nullptr);
+
 /// @brief Settings of AsBuiltMap.
 struct AsBuiltSettings {
   double sigma_translation = 0.01;  ///< construction tolerance, per axis [m] (prior of every element)
