@@ -27,42 +27,89 @@ float next_float_up(float v) {
   return v;
 }
 
-void min_max_sum(const float* x, std::size_t count, float& lo, float& hi, float& sum) {
-  float l[4] = {lo, lo, lo, lo};
-  float h[4] = {hi, hi, hi, hi};
-  float s[4] = {0.0f, 0.0f, 0.0f, 0.0f};
-  std::size_t i = 0;
+void kd_record_box(const float* records, std::uint32_t begin, std::uint32_t end, float* lo, float* hi, float* sum) {
+  constexpr int kLanes = kKdRecord - 1;
 #if defined(__SSE2__)
-  // The same four lanes in one register each: minps(x, l) is x < l ? x : l, as below.
-  __m128 vl = _mm_set1_ps(lo);
-  __m128 vh = _mm_set1_ps(hi);
-  __m128 vs = _mm_setzero_ps();
-  for (; i + 4 <= count; i += 4) {
-    const __m128 v = _mm_loadu_ps(x + i);
+  // One record per register; the index lane is zeroed before it meets arithmetic (its bits read as
+  // a float are often subnormal, which some CPUs add slowly).
+  const __m128 coords = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1));
+  // Two records per step into two sets of accumulators, so that the min, max and add chains of
+  // consecutive records overlap; combined at the end in a fixed order.
+  const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
+  __m128 vl = inf, vl2 = inf;
+  __m128 vh = _mm_sub_ps(_mm_setzero_ps(), inf), vh2 = vh;
+  __m128 vs = _mm_setzero_ps(), vs2 = vs;
+  const float* r = records + static_cast<std::size_t>(kKdRecord) * begin;
+  std::uint32_t i = begin;
+  for (; i + 2 <= end; i += 2, r += 2 * kKdRecord) {
+    const __m128 v = _mm_and_ps(_mm_loadu_ps(r), coords);
+    const __m128 v2 = _mm_and_ps(_mm_loadu_ps(r + kKdRecord), coords);
+    vl = _mm_min_ps(v, vl);
+    vh = _mm_max_ps(v, vh);
+    vs = _mm_add_ps(vs, v);
+    vl2 = _mm_min_ps(v2, vl2);
+    vh2 = _mm_max_ps(v2, vh2);
+    vs2 = _mm_add_ps(vs2, v2);
+  }
+  if (i < end) {
+    const __m128 v = _mm_and_ps(_mm_loadu_ps(r), coords);
     vl = _mm_min_ps(v, vl);
     vh = _mm_max_ps(v, vh);
     vs = _mm_add_ps(vs, v);
   }
-  _mm_storeu_ps(l, vl);
-  _mm_storeu_ps(h, vh);
-  _mm_storeu_ps(s, vs);
+  vl = _mm_min_ps(vl, vl2);
+  vh = _mm_max_ps(vh, vh2);
+  vs = _mm_add_ps(vs, vs2);
+  alignas(16) float l[4], h[4], s[4];
+  _mm_store_ps(l, vl);
+  _mm_store_ps(h, vh);
+  _mm_store_ps(s, vs);
+  for (int k = 0; k < kLanes; ++k) {
+    lo[k] = l[k];
+    hi[k] = h[k];
+    sum[k] = s[k];
+  }
 #else
-  for (; i + 4 <= count; i += 4) {
-    for (int j = 0; j < 4; ++j) {
-      l[j] = x[i + j] < l[j] ? x[i + j] : l[j];
-      h[j] = x[i + j] > h[j] ? x[i + j] : h[j];
-      s[j] += x[i + j];
+  for (int k = 0; k < kLanes; ++k) {
+    lo[k] = std::numeric_limits<float>::infinity();
+    hi[k] = -std::numeric_limits<float>::infinity();
+    sum[k] = 0.0f;
+  }
+  const float* r = records + static_cast<std::size_t>(kKdRecord) * begin;
+  for (std::uint32_t i = begin; i < end; ++i, r += kKdRecord) {
+    for (int k = 0; k < kLanes; ++k) {
+      lo[k] = r[k] < lo[k] ? r[k] : lo[k];
+      hi[k] = r[k] > hi[k] ? r[k] : hi[k];
+      sum[k] += r[k];
     }
   }
 #endif
-  for (; i < count; ++i) {
-    l[0] = x[i] < l[0] ? x[i] : l[0];
-    h[0] = x[i] > h[0] ? x[i] : h[0];
-    s[0] += x[i];
+}
+
+std::uint32_t kd_partition_records(float* records, int dim, float split, std::uint32_t begin, std::uint32_t end) {
+  // Lomuto's scheme without its branch: [begin, front) is left, [front, src) right. Record src is
+  // swapped with record front whatever its side, and front moves on only when it is left; a right
+  // record so swapped lands at front, which stays the first right slot (or src itself when
+  // front == src).
+  std::uint32_t front = begin;
+  float* r = records + static_cast<std::size_t>(kKdRecord) * begin;
+  for (std::uint32_t src = begin; src < end; ++src, r += kKdRecord) {
+    const std::uint32_t is_left = r[dim] < split ? 1u : 0u;
+    float* f = records + static_cast<std::size_t>(kKdRecord) * front;
+#if defined(__SSE2__)
+    const __m128 v = _mm_loadu_ps(r);
+    const __m128 w = _mm_loadu_ps(f);
+    _mm_storeu_ps(r, w);
+    _mm_storeu_ps(f, v);
+#else
+    float v[kKdRecord];
+    std::memcpy(v, r, sizeof v);
+    std::memmove(r, f, sizeof v);
+    std::memcpy(f, v, sizeof v);
+#endif
+    front += is_left;
   }
-  lo = std::min(std::min(l[0], l[1]), std::min(l[2], l[3]));
-  hi = std::max(std::max(h[0], h[1]), std::max(h[2], h[3]));
-  sum = (s[0] + s[1]) + (s[2] + s[3]);
+  return front;
 }
 
 }  // namespace detail

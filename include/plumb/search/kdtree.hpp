@@ -7,9 +7,13 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <limits>
+#include <memory>
+#include <new>
 #include <optional>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -19,6 +23,29 @@
 #include "plumb/search/neighbors.hpp"
 
 namespace plumb {
+
+namespace detail {
+/// std::allocator whose value-less construct() leaves the value uninitialised: a vector resized
+/// with it is not zero-filled first (the kd-tree's build writes every slot it reads).
+template <typename T>
+struct KdUninitAllocator : std::allocator<T> {
+  template <typename U>
+  struct rebind {
+    using other = KdUninitAllocator<U>;
+  };
+  KdUninitAllocator() = default;
+  template <typename U>
+  KdUninitAllocator(const KdUninitAllocator<U>& /*other*/) noexcept {}
+  template <typename U>
+  void construct(U* p) noexcept {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <typename U, typename... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+}  // namespace detail
 
 /// @brief Where a KdTree node is cut along its widest dimension.
 /// On the benchmark clouds kMean builds a shallower tree (LiDAR density falls
@@ -45,10 +72,12 @@ struct KdTreeSettings {
 ///
 /// Construction splits a node's points on the widest dimension of their tight bounding box, at
 /// the mean coordinate (default; or at the box midpoint, see KdTreeSplit), with a branch-free
-/// partition, until at most `leaf_size` points remain or all points of a node coincide; the
-/// children's tight boxes (and coordinate sums) are computed in one vectorizable pass each. Nodes
-/// live in one vector in depth-first order (left child next to its parent), leaves store their
-/// coordinates as one contiguous block. O(n log n) time, O(n) memory.
+/// in-place partition of 16-byte point records (coordinates and index), until at most `leaf_size`
+/// points remain or all points of a node coincide; the children's tight boxes (and coordinate
+/// sums) take one SIMD pass over their records. Nodes live in one vector in depth-first order
+/// (left child next to its parent); each leaf stores its points as one contiguous block (x's,
+/// y's, z's, indices), in the order of their input indices, in the buffer the records occupied.
+/// O(n log n) time, O(n) memory: 16 bytes per point, and 5-8 per point of nodes.
 ///
 /// Non-finite points (NaN or inf in any coordinate, common in organised LiDAR frames) are skipped
 /// when building and never appear in results; size() counts only the indexed points. A tree needs
@@ -78,11 +107,11 @@ class KdTree {
       : KdTree(cloud.points, settings) {}
 
   /// @brief Number of indexed (finite) points.
-  std::size_t size() const { return ids_.size(); }
+  std::size_t size() const { return size_; }
   /// @brief Number of points given to the constructor, finite or not.
   std::size_t num_input_points() const { return num_input_points_; }
   /// @brief Number of input points skipped because a coordinate was not finite.
-  std::size_t num_skipped() const { return num_input_points_ - ids_.size(); }
+  std::size_t num_skipped() const { return num_input_points_ - size_; }
   /// @brief Number of tree nodes (inner + leaves).
   std::size_t num_nodes() const { return nodes_.size(); }
   /// @brief Depth of the deepest node (root = 0); about log2(size() / leaf_size) on typical data.
@@ -158,6 +187,13 @@ class KdTree {
     return d;
   }
 
+  /// Original index of point j of a leaf whose index row starts at `ids` (bits stored as floats).
+  static std::uint32_t leaf_id(const float* ids, std::uint32_t j) {
+    std::uint32_t id;
+    std::memcpy(&id, ids + j, sizeof id);
+    return id;
+  }
+
   struct KnnSet;
   struct NnSet;
   struct RadiusSet;
@@ -174,8 +210,10 @@ class KdTree {
 
   KdTreeSettings settings_;
   std::size_t num_input_points_ = 0;
-  std::vector<float> coords_;       ///< leaf blocks: leaf [a, b) holds its x's, then y's (, z's)
-  std::vector<std::uint32_t> ids_;  ///< original index of stored point i
+  std::size_t size_ = 0;            ///< number of stored (finite) points
+  /// Leaf blocks: leaf [a, b) holds, from 4 a on, its b - a x's, then y's (, z's), then in the
+  /// fourth row the bits of their original indices. During construction: one point record each.
+  std::vector<float, detail::KdUninitAllocator<float>> coords_;
   std::vector<Node> nodes_;         ///< depth-first; nodes_[0] is the root
   std::size_t max_depth_ = 0;       ///< depth of the deepest node (root = 0)
   float box_lo_[Dim] = {};          ///< bounding box of all stored points

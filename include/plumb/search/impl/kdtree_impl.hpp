@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <utility>
@@ -84,7 +85,7 @@ struct KdTree<Dim>::NnSet {
   }
 };
 
-/// Every point with d <= r^2, appended to the caller's vectors (as stored positions).
+/// Every point with d <= r^2, appended to the caller's vectors (original indices).
 template <int Dim>
 struct KdTree<Dim>::RadiusSet {
   std::vector<std::size_t>* idx;
@@ -106,70 +107,39 @@ struct KdTree<Dim>::RadiusSet {
 
 // ---- construction -----------------------------------------------------------------------------
 
-template <int Dim>
-KdTree<Dim>::KdTree(const std::vector<Point>& points, const KdTreeSettings& settings)
-    : settings_(settings), num_input_points_(points.size()) {
-  PLUMB_CHECK(settings.leaf_size >= 1, "KdTree: settings.leaf_size must be >= 1 (got 0)");
-  PLUMB_CHECK(points.size() < static_cast<std::size_t>(std::numeric_limits<std::uint32_t>::max()),
-              "KdTree: " << points.size() << " points exceed the limit of 2^32 - 1");
-  std::size_t n = 0;
-  for (const Point& p : points) n += p.allFinite() ? 1 : 0;
-  PLUMB_CHECK(n > 0, "KdTree: input has no finite point (" << points.size() << " points given)");
-
-  coords_.resize(static_cast<std::size_t>(Dim) * n);
-  ids_.resize(n);
-  for (int k = 0; k < Dim; ++k) {
-    box_lo_[k] = std::numeric_limits<float>::infinity();
-    box_hi_[k] = -std::numeric_limits<float>::infinity();
-  }
-  std::size_t j = 0;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const Point& p = points[i];
-    if (!p.allFinite()) continue;
-    for (int k = 0; k < Dim; ++k) {
-      coords_[static_cast<std::size_t>(k) * n + j] = p[k];
-    }
-    ids_[j] = static_cast<std::uint32_t>(i);
-    ++j;
-  }
-  build();
-}
-
 namespace detail {
 
-/// Tight [lo, hi] and the sum of x[0..count); four independent lanes so the loop pipelines.
-void min_max_sum(const float* x, std::size_t count, float& lo, float& hi, float& sum);
+/// Floats per point record during construction: up to three coordinates, then the point's
+/// original index (its bits) in the last lane.
+constexpr int kKdRecord = 4;
+
+inline void kd_set_record_id(float* record, std::uint32_t id) { std::memcpy(record + kKdRecord - 1, &id, sizeof id); }
+inline std::uint32_t kd_record_id(const float* record) {
+  std::uint32_t id;
+  std::memcpy(&id, record + kKdRecord - 1, sizeof id);
+  return id;
+}
+
+/// Tight [lo, hi] and the sum of the coordinates of records [begin, end) (lanes 0..2; the index
+/// lane is left out).
+void kd_record_box(const float* records, std::uint32_t begin, std::uint32_t end, float* lo, float* hi, float* sum);
+
+/// Branch-free in-place partition of records [begin, end) on coordinate `dim` < split: the left
+/// ones first. Returns the first right slot.
+std::uint32_t kd_partition_records(float* records, int dim, float split, std::uint32_t begin, std::uint32_t end);
 
 /// Bounds of a node's points under construction.
 template <int Dim>
 struct KdBuildBox {
-  float lo[Dim];
-  float hi[Dim];
-  float sum[Dim];  // of the coordinates, for the mean split
+  float lo[kKdRecord - 1];
+  float hi[kKdRecord - 1];
+  float sum[kKdRecord - 1];  // of the coordinates, for the mean split
 };
 
-/// The tight box of points [begin, end) of the coordinate columns c.
 template <int Dim>
-inline KdBuildBox<Dim> kd_tight_box(const float* const* c, std::uint32_t begin, std::uint32_t end) {
+inline KdBuildBox<Dim> kd_box(const float* records, std::uint32_t begin, std::uint32_t end) {
   KdBuildBox<Dim> box;
-  for (int k = 0; k < Dim; ++k) {
-    box.lo[k] = std::numeric_limits<float>::infinity();
-    box.hi[k] = -std::numeric_limits<float>::infinity();
-    min_max_sum(c[k] + begin, end - begin, box.lo[k], box.hi[k], box.sum[k]);
-  }
-  return box;
-}
-
-/// The box of a child [begin, end) of a node split along `dim`. A child that will be a leaf needs
-/// only its bound along `dim` (for this node's lo / hi).
-template <int Dim>
-inline KdBuildBox<Dim> kd_child_box(const float* const* c, std::uint32_t begin, std::uint32_t end, int dim,
-                                    std::size_t leaf_size) {
-  if (end - begin > leaf_size) return kd_tight_box<Dim>(c, begin, end);
-  KdBuildBox<Dim> box{};
-  box.lo[dim] = std::numeric_limits<float>::infinity();
-  box.hi[dim] = -std::numeric_limits<float>::infinity();
-  min_max_sum(c[dim] + begin, end - begin, box.lo[dim], box.hi[dim], box.sum[dim]);
+  kd_record_box(records, begin, end, box.lo, box.hi, box.sum);
   return box;
 }
 
@@ -188,73 +158,90 @@ inline int kd_widest_dim(const KdBuildBox<Dim>& box, float& extent) {
   return dim;
 }
 
-/// Branch-free out-of-place partition of points [begin, end) of columns c (and ids) on coordinate
-/// `dim` < split: every point is written to the next free slot of its side in columns s (and
-/// out_ids), left from the front, right from the back. Returns the first right slot.
-template <int Dim>
-inline std::uint32_t kd_partition(const float* const* c, float* const* s, const std::uint32_t* ids,
-                                  std::uint32_t* out_ids, int dim, float split, std::uint32_t begin,
-                                  std::uint32_t end) {
-  const float* cd = c[dim];
-  std::uint32_t num_left = 0;
-  std::uint32_t last = end - 1;
-  for (std::uint32_t src = begin; src < end; ++src) {
-    const bool is_left = cd[src] < split;
-    const std::uint32_t pos = is_left ? begin + num_left : last;
-    for (int k = 0; k < Dim; ++k) s[k][pos] = c[k][src];
-    out_ids[pos] = ids[src];
-    num_left += is_left ? 1 : 0;
-    last -= is_left ? 0 : 1;
-  }
-  return begin + num_left;
-}
-
 }  // namespace detail
 
 template <int Dim>
-void KdTree<Dim>::build() {
-  const std::size_t n = ids_.size();
-  const std::size_t leaf_size = settings_.leaf_size;
-  // Two buffers (coordinate columns + ids): a node's points lie in buffer `buf` of its task, its
-  // partition writes them to the same range of the other buffer, where its children find them.
-  // (Uninitialised: every slot a node reads has been written by its parent's partition.)
-  const std::unique_ptr<float[]> other(new float[static_cast<std::size_t>(Dim) * n]);
-  const std::unique_ptr<std::uint32_t[]> other_ids(new std::uint32_t[n]);
-  float* cols[2][Dim];
-  for (int k = 0; k < Dim; ++k) {
-    cols[0][k] = coords_.data() + static_cast<std::size_t>(k) * n;
-    cols[1][k] = other.get() + static_cast<std::size_t>(k) * n;
+KdTree<Dim>::KdTree(const std::vector<Point>& points, const KdTreeSettings& settings)
+    : settings_(settings), num_input_points_(points.size()) {
+  PLUMB_CHECK(settings.leaf_size >= 1, "KdTree: settings.leaf_size must be >= 1 (got 0)");
+  PLUMB_CHECK(points.size() < static_cast<std::size_t>(std::numeric_limits<std::uint32_t>::max()),
+              "KdTree: " << points.size() << " points exceed the limit of 2^32 - 1");
+  std::size_t n = 0;
+  for (const Point& p : points) n += p.allFinite() ? 1 : 0;
+  PLUMB_CHECK(n > 0, "KdTree: input has no finite point (" << points.size() << " points given)");
+
+  // Each finite point as one record of four floats: its coordinates, then its index's bits in the
+  // last lane (see detail::kKdRecord). The build partitions whole records, and turns the buffer
+  // into leaf blocks at the end.
+  size_ = n;
+  coords_.resize(static_cast<std::size_t>(detail::kKdRecord) * n);
+  std::size_t j = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Point& p = points[i];
+    if (!p.allFinite()) continue;
+    float* r = coords_.data() + detail::kKdRecord * j;
+    for (int k = 0; k < Dim; ++k) r[k] = p[k];
+    for (int k = Dim; k < detail::kKdRecord - 1; ++k) r[k] = 0.0f;
+    detail::kd_set_record_id(r, static_cast<std::uint32_t>(i));
+    ++j;
   }
-  std::uint32_t* id_buf[2] = {ids_.data(), other_ids.get()};
+  build();
+}
+
+template <int Dim>
+void KdTree<Dim>::build() {
+  const std::size_t n = size_;
+  float* records = coords_.data();
+  const std::size_t leaf_size = settings_.leaf_size;
+  constexpr std::size_t R = detail::kKdRecord;
+  // One buffer of records: a node's partition reorders its range in place, so its children find
+  // their records in the two halves.
 
   using Box = detail::KdBuildBox<Dim>;
   struct Task {
     std::uint32_t begin, end, parent, depth;
     bool is_right;
-    int buf;
     Box box;
   };
 
   nodes_.clear();
   nodes_.reserve(2 * (n / std::max<std::size_t>(leaf_size / 2, 1)) + 1);
-  // Leaf-blocked layout, written as each leaf is made (its points are still in cache): the points
-  // of leaf [a, b) occupy blocks[Dim * a, Dim * b), first their b - a x coordinates, then the y's
-  // (then the z's), so a leaf scan reads one contiguous block. Becomes coords_ at the end.
-  std::vector<float> blocks(static_cast<std::size_t>(Dim) * n);
+  // Leaf-blocked layout, written as each leaf is made (its records are still in cache): the points
+  // of leaf [a, b) occupy coords_[4 a, 4 b), first their m = b - a x coordinates, then the y's
+  // (then the z's), then their indices, so a leaf scan reads one contiguous block. No other node
+  // reads that range once the leaf is reached, so the block replaces the leaf's records. The
+  // points go in the order of their input indices: the in-place partition scrambles them, and
+  // queries run about 15 % faster over leaves whose points follow the input (scan) order.
+  std::vector<float> scratch;
+  std::vector<std::uint64_t> order;  // index << 32 | slot in the leaf
   auto finish_leaf = [&](const Task& t) {
     const std::size_t m = t.end - t.begin;
-    float* block = blocks.data() + static_cast<std::size_t>(Dim) * t.begin;
-    for (int k = 0; k < Dim; ++k) {
-      std::copy(cols[t.buf][k] + t.begin, cols[t.buf][k] + t.end, block + k * m);
+    float* block = records + R * t.begin;
+    scratch.assign(block, block + R * m);
+    order.resize(m);
+    for (std::size_t j = 0; j < m; ++j) {
+      order[j] = static_cast<std::uint64_t>(detail::kd_record_id(scratch.data() + R * j)) << 32 | j;
     }
-    if (t.buf == 1) {
-      std::copy(other_ids.get() + t.begin, other_ids.get() + t.end, ids_.data() + t.begin);
+    if (m <= 32) {  // insertion sort: a leaf holds a few points
+      for (std::size_t j = 1; j < m; ++j) {
+        const std::uint64_t key = order[j];
+        std::size_t i = j;
+        for (; i > 0 && order[i - 1] > key; --i) order[i] = order[i - 1];
+        order[i] = key;
+      }
+    } else {
+      std::sort(order.begin(), order.end());
+    }
+    for (std::size_t j = 0; j < m; ++j) {
+      const float* rec = scratch.data() + R * (order[j] & 0xffffffffu);
+      for (int k = 0; k < Dim; ++k) block[static_cast<std::size_t>(k) * m + j] = rec[k];
+      std::memcpy(block + (R - 1) * m + j, rec + R - 1, sizeof(float));  // the index's bits, as they are
     }
   };
   std::vector<Task> stack;
   stack.reserve(64);
-  Task root{0, static_cast<std::uint32_t>(n), 0, 0, false, 0,
-            detail::kd_tight_box<Dim>(cols[0], 0, static_cast<std::uint32_t>(n))};
+  Task root{0, static_cast<std::uint32_t>(n), 0, 0, false,
+            detail::kd_box<Dim>(records, 0, static_cast<std::uint32_t>(n))};
   max_depth_ = 0;
   for (int k = 0; k < Dim; ++k) {
     box_lo_[k] = root.box.lo[k];
@@ -269,7 +256,7 @@ void KdTree<Dim>::build() {
     max_depth_ = std::max<std::size_t>(max_depth_, t.depth);
     nodes_.push_back(Node{t.begin, t.end, 0.0f, 0.0f, kLeaf});  // a leaf unless split below
     if (t.is_right) nodes_[t.parent].a = id;
-    if (t.end - t.begin <= leaf_size) {  // a leaf (its task carries no box)
+    if (t.end - t.begin <= leaf_size) {  // a leaf
       finish_leaf(t);
       continue;
     }
@@ -292,24 +279,19 @@ void KdTree<Dim>::build() {
     }
     if (!(split > lo) || split > hi) split = hi;
 
-    // Partition into the other buffer, where the children find their points.
-    float* const* s = cols[1 - t.buf];
-    const std::uint32_t mid =
-        detail::kd_partition<Dim>(cols[t.buf], s, id_buf[t.buf], id_buf[1 - t.buf], dim, split, t.begin, t.end);
-    const Box left = detail::kd_child_box<Dim>(s, t.begin, mid, dim, leaf_size);
-    const Box right = detail::kd_child_box<Dim>(s, mid, t.end, dim, leaf_size);
+    const std::uint32_t mid = detail::kd_partition_records(records, dim, split, t.begin, t.end);
+    const Box left = detail::kd_box<Dim>(records, t.begin, mid);
+    const Box right = detail::kd_box<Dim>(records, mid, t.end);
     Node& node = nodes_[id];
     node.a = 0;  // right child, patched when it is created
     node.b = 0;
     node.lo = left.hi[dim];
     node.hi = right.lo[dim];
     node.dim = dim;
-    stack.push_back(Task{mid, t.end, id, t.depth + 1, true, 1 - t.buf, right});
+    stack.push_back(Task{mid, t.end, id, t.depth + 1, true, right});
     // popped next: becomes node id + 1
-    stack.push_back(Task{t.begin, mid, id, t.depth + 1, false, 1 - t.buf, left});
+    stack.push_back(Task{t.begin, mid, id, t.depth + 1, false, left});
   }
-
-  coords_.swap(blocks);
 }
 
 // ---- queries ----------------------------------------------------------------------------------
@@ -334,10 +316,11 @@ template <int Dim>
 template <typename Set>
 void KdTree<Dim>::scan_leaf(const Node& node, const float* q, Set& set) const {
   const std::uint32_t m = node.b - node.a;
-  const float* x = coords_.data() + static_cast<std::size_t>(Dim) * node.a;
+  const float* x = coords_.data() + static_cast<std::size_t>(detail::kKdRecord) * node.a;
+  const float* id = x + static_cast<std::size_t>(detail::kKdRecord - 1) * m;  // the indices' row
   if (node.dim == kCoincidentLeaf) {
     const float d = leaf_dist(x, m, 0, q);
-    for (std::uint32_t j = 0; j < m && set.accepts(d); ++j) set.add(d, node.a + j);
+    for (std::uint32_t j = 0; j < m && set.accepts(d); ++j) set.add(d, leaf_id(id, j));
     return;
   }
   std::uint32_t j = 0;
@@ -361,12 +344,12 @@ void KdTree<Dim>::scan_leaf(const Node& node, const float* q, Set& set) const {
       alignas(16) float d[4];
       _mm_store_ps(d, d4);
       for (std::uint32_t lane = 0; lane < 4; ++lane) {
-        if (mask & (1 << lane)) set.add(d[lane], node.a + j + lane);
+        if (mask & (1 << lane)) set.add(d[lane], leaf_id(id, j + lane));
       }
     }
   }
 #endif
-  for (; j < m; ++j) set.add(leaf_dist(x, m, j, q), node.a + j);
+  for (; j < m; ++j) set.add(leaf_dist(x, m, j, q), leaf_id(id, j));
 }
 
 // Depth-first search, nearer child first. box_d[k] holds the squared distance along dimension k
@@ -503,7 +486,6 @@ std::size_t KdTree<Dim>::knn(const Point& query, std::size_t k, std::size_t* ind
   float box_d[Dim];
   if (!set.visit(root_box_dist(query.data(), box_d))) return 0;
   search(query.data(), box_d, set);
-  for (std::size_t i = 0; i < set.count; ++i) indices[i] = ids_[indices[i]];
   return set.count;
 }
 
@@ -540,7 +522,7 @@ std::optional<Neighbor> KdTree<Dim>::nearest(const Point& query, float max_dist_
   if (!set.visit(bound)) return std::nullopt;
   search(query.data(), box_d, set);
   if (set.best_i == NnSet::kNone) return std::nullopt;
-  return Neighbor{ids_[set.best_i], set.best_d};
+  return Neighbor{set.best_i, set.best_d};
 }
 
 template <int Dim>
@@ -566,7 +548,7 @@ std::size_t KdTree<Dim>::radius(const Point& query, float r, std::vector<std::si
   const std::size_t count = indices.size();
   if (sorted && count > 1) {
     std::vector<Neighbor> tmp(count);
-    for (std::size_t i = 0; i < count; ++i) tmp[i] = {ids_[indices[i]], sq_dists[i]};
+    for (std::size_t i = 0; i < count; ++i) tmp[i] = {indices[i], sq_dists[i]};
     std::sort(tmp.begin(), tmp.end(), [](const Neighbor& x, const Neighbor& y) {
       return x.dist_sq < y.dist_sq || (x.dist_sq == y.dist_sq && x.index < y.index);
     });
@@ -574,8 +556,6 @@ std::size_t KdTree<Dim>::radius(const Point& query, float r, std::vector<std::si
       indices[i] = tmp[i].index;
       sq_dists[i] = tmp[i].dist_sq;
     }
-  } else {
-    for (std::size_t i = 0; i < count; ++i) indices[i] = ids_[indices[i]];
   }
   return count;
 }
