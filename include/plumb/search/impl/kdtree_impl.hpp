@@ -174,7 +174,9 @@ KdTree<Dim>::KdTree(const std::vector<Point>& points, const KdTreeSettings& sett
   // last lane (see detail::kKdRecord). The build partitions whole records, and turns the buffer
   // into leaf blocks at the end.
   size_ = n;
-  coords_.resize(static_cast<std::size_t>(detail::kKdRecord) * n);
+  // (+ 4 floats of padding: a leaf scan's last four-wide load may run past the last block)
+  coords_.resize(static_cast<std::size_t>(detail::kKdRecord) * n + 4);
+  std::fill(coords_.end() - 4, coords_.end(), 0.0f);
   std::size_t j = 0;
   for (std::size_t i = 0; i < points.size(); ++i) {
     const Point& p = points[i];
@@ -346,6 +348,28 @@ void KdTree<Dim>::scan_leaf(const Node& node, const float* q, Set& set) const {
       for (std::uint32_t lane = 0; lane < 4; ++lane) {
         if (mask & (1 << lane)) set.add(d[lane], leaf_id(id, j + lane));
       }
+    }
+    if (j < m) {
+      // The last 1-3 points the same way: the loads run on into the next row of the block (or
+      // the padding after the last block); those lanes are zeroed before any arithmetic and
+      // masked out after it.
+      const std::uint32_t rest = m - j;
+      const __m128 valid = _mm_castsi128_ps(_mm_set_epi32(0, rest > 2 ? -1 : 0, rest > 1 ? -1 : 0, -1));
+      __m128 d4 = _mm_setzero_ps();
+      for (int k = 0; k < Dim; ++k) {
+        const __m128 c = _mm_and_ps(_mm_loadu_ps(x + static_cast<std::size_t>(k) * m + j), valid);
+        const __m128 t = _mm_sub_ps(c, qv[k]);
+        d4 = _mm_add_ps(d4, _mm_mul_ps(t, t));
+      }
+      const int mask = _mm_movemask_ps(_mm_cmplt_ps(d4, _mm_set1_ps(set.bound()))) & ((1 << rest) - 1);
+      if (mask != 0) {
+        alignas(16) float d[4];
+        _mm_store_ps(d, d4);
+        for (std::uint32_t lane = 0; lane < rest; ++lane) {
+          if (mask & (1 << lane)) set.add(d[lane], leaf_id(id, j + lane));
+        }
+      }
+      j = m;
     }
   }
 #endif
