@@ -37,12 +37,25 @@ inline std::string data_dir() { return test::data_dir(); }
 /// @brief Absolute path of a file under the data directory.
 inline std::string data_path(const std::string& relative) { return data_dir() + "/" + relative; }
 
-/// @brief Limit OpenMP (used by Open3D) to one thread, so peers run single-threaded like plumb.
-///        libgomp reads OMP_NUM_THREADS when it loads, before main(), so this calls
-///        omp_set_num_threads through the already loaded runtime instead (no-op without OpenMP).
-inline void single_thread_openmp() {
+/// @brief Set the number of OpenMP threads (used by Open3D and PCL's OMP estimators); peers run
+///        single-threaded like plumb unless a benchmark says otherwise. libgomp reads
+///        OMP_NUM_THREADS when it loads, before main(), so this calls omp_set_num_threads through
+///        the already loaded runtime instead (no-op without OpenMP).
+inline void openmp_threads(int threads) {
   using SetFn = void (*)(int);
-  if (void* sym = dlsym(RTLD_DEFAULT, "omp_set_num_threads")) reinterpret_cast<SetFn>(sym)(1);
+  if (void* sym = dlsym(RTLD_DEFAULT, "omp_set_num_threads")) reinterpret_cast<SetFn>(sym)(threads);
+}
+inline void single_thread_openmp() { openmp_threads(1); }
+
+/// @brief True when an OpenMP runtime is loaded (a peer's threads: variants mean something).
+inline bool have_openmp() { return dlsym(RTLD_DEFAULT, "omp_set_num_threads") != nullptr; }
+
+/// @brief Runs `fn` (a peer's single-thread benchmark that parallelises with OpenMP, as Open3D
+///        does) on `threads` OpenMP threads, then puts OpenMP back to one thread.
+inline void with_openmp_threads(benchmark::State& state, int threads, void (*fn)(benchmark::State&)) {
+  openmp_threads(threads);
+  fn(state);
+  openmp_threads(1);
 }
 
 /// @brief Times a sequential estimator frame by frame: `step(i)` processes frame i, for i = first,

@@ -22,7 +22,9 @@
 
 #ifdef PLUMB_BENCH_HAVE_PCL
 #include <pcl/features/fpfh.h>
+#include <pcl/features/fpfh_omp.h>
 #include <pcl/features/normal_3d.h>
+#include <pcl/features/normal_3d_omp.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 #include <pcl/search/kdtree.h>
@@ -144,6 +146,41 @@ void bm_fpfh_pcl(benchmark::State& state) {
   }
   finish(state);
 }
+
+// PCL's OpenMP estimators, the same work on N threads.
+void bm_normals_pcl_omp(benchmark::State& state, int threads) {
+  if (!require(state)) return;
+  const auto pts = pcl_points();
+  pcl::PointCloud<pcl::Normal> out;
+  for (auto _ : state) {
+    pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> ne(static_cast<unsigned>(threads));
+    ne.setInputCloud(pts);
+    ne.setSearchMethod(std::make_shared<pcl::search::KdTree<pcl::PointXYZ>>());
+    ne.setRadiusSearch(kRadius);
+    ne.setViewPoint(0.0f, 0.0f, 0.0f);
+    ne.compute(out);
+    benchmark::DoNotOptimize(out.points.data());
+  }
+  finish(state);
+}
+
+void bm_fpfh_pcl_omp(benchmark::State& state, int threads) {
+  if (!require(state)) return;
+  const auto pts = pcl_points();
+  auto normals = std::make_shared<pcl::PointCloud<pcl::Normal>>();
+  for (const auto& n : cloud().normals) normals->push_back(pcl::Normal(n.x(), n.y(), n.z()));
+  pcl::PointCloud<pcl::FPFHSignature33> out;
+  for (auto _ : state) {
+    pcl::FPFHEstimationOMP<pcl::PointXYZ, pcl::Normal, pcl::FPFHSignature33> fe(static_cast<unsigned>(threads));
+    fe.setInputCloud(pts);
+    fe.setInputNormals(normals);
+    fe.setSearchMethod(std::make_shared<pcl::search::KdTree<pcl::PointXYZ>>());
+    fe.setRadiusSearch(kRadius);
+    fe.compute(out);
+    benchmark::DoNotOptimize(out.points.data());
+  }
+  finish(state);
+}
 #endif
 
 #ifdef PLUMB_BENCH_HAVE_OPEN3D
@@ -181,6 +218,14 @@ void bm_fpfh_open3d(benchmark::State& state) {
   }
   finish(state);
 }
+
+// Open3D parallelises both with OpenMP: the same work on N OpenMP threads.
+void bm_normals_open3d_threads(benchmark::State& state, int threads) {
+  plumb::bench::with_openmp_threads(state, threads, bm_normals_open3d);
+}
+void bm_fpfh_open3d_threads(benchmark::State& state, int threads) {
+  plumb::bench::with_openmp_threads(state, threads, bm_fpfh_open3d);
+}
 #endif
 
 }  // namespace
@@ -192,6 +237,16 @@ int main(int argc, char** argv) {
                                     PLUMB_BENCH_OPEN3D(bm_normals_open3d));
   plumb::bench::register_threads("normals/plumb/" + ds, bm_normals_plumb_threads);
   plumb::bench::register_threads("fpfh/plumb/" + ds, bm_fpfh_plumb_threads);
+#ifdef PLUMB_BENCH_HAVE_PCL
+  plumb::bench::register_threads("normals/pcl_omp/" + ds, bm_normals_pcl_omp);
+  plumb::bench::register_threads("fpfh/pcl_omp/" + ds, bm_fpfh_pcl_omp);
+#endif
+#ifdef PLUMB_BENCH_HAVE_OPEN3D
+  if (plumb::bench::have_openmp()) {
+    plumb::bench::register_threads("normals/open3d/" + ds, bm_normals_open3d_threads);
+    plumb::bench::register_threads("fpfh/open3d/" + ds, bm_fpfh_open3d_threads);
+  }
+#endif
   plumb::bench::register_with_peers("fpfh", ds, bm_fpfh_plumb, PLUMB_BENCH_PCL(bm_fpfh_pcl),
                                     PLUMB_BENCH_OPEN3D(bm_fpfh_open3d));
   return plumb::bench::run_benchmarks(argc, argv);

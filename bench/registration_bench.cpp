@@ -330,6 +330,11 @@ void bm_icp_open3d(benchmark::State& state) {
   }
   report_icp(state, T, c);
 }
+
+// Open3D's ICP parallelises its correspondence search with OpenMP: the same work on N threads.
+void bm_icp_open3d_threads(benchmark::State& state, int threads) {
+  plumb::bench::with_openmp_threads(state, threads, bm_icp_open3d);
+}
 #endif
 
 }  // namespace
@@ -354,5 +359,8 @@ int main(int argc, char** argv) {
   plumb::bench::register_with_peers("icp", ds, bm_icp_plumb, PLUMB_BENCH_PCL(bm_icp_pcl),
                                     PLUMB_BENCH_OPEN3D(bm_icp_open3d));
   plumb::bench::register_threads("icp/plumb/" + ds, bm_icp_plumb_threads);
+#ifdef PLUMB_BENCH_HAVE_OPEN3D
+  if (plumb::bench::have_openmp()) plumb::bench::register_threads("icp/open3d/" + ds, bm_icp_open3d_threads);
+#endif
   return plumb::bench::run_benchmarks(argc, argv);
 }
