@@ -113,12 +113,15 @@ pcl::PointCloud<pcl::PointXYZ>::Ptr pcl_points() {
   return out;
 }
 
-void bm_normals_pcl(benchmark::State& state) {
+// One timed PCL estimate per iteration, with the plain estimator or its OpenMP twin (`args` are
+// the constructor's: the OpenMP ones take the thread count).
+template <class Estimator, class... Args>
+void pcl_normals(benchmark::State& state, Args... args) {
   if (!require(state)) return;
   const auto pts = pcl_points();
   pcl::PointCloud<pcl::Normal> out;
   for (auto _ : state) {
-    pcl::NormalEstimation<pcl::PointXYZ, pcl::Normal> ne;
+    Estimator ne(args...);
     ne.setInputCloud(pts);
     ne.setSearchMethod(std::make_shared<pcl::search::KdTree<pcl::PointXYZ>>());
     ne.setRadiusSearch(kRadius);
@@ -129,14 +132,15 @@ void bm_normals_pcl(benchmark::State& state) {
   finish(state);
 }
 
-void bm_fpfh_pcl(benchmark::State& state) {
+template <class Estimator, class... Args>
+void pcl_fpfh(benchmark::State& state, Args... args) {
   if (!require(state)) return;
   const auto pts = pcl_points();
   auto normals = std::make_shared<pcl::PointCloud<pcl::Normal>>();
   for (const auto& n : cloud().normals) normals->push_back(pcl::Normal(n.x(), n.y(), n.z()));
   pcl::PointCloud<pcl::FPFHSignature33> out;
   for (auto _ : state) {
-    pcl::FPFHEstimation<pcl::PointXYZ, pcl::Normal, pcl::FPFHSignature33> fe;
+    Estimator fe(args...);
     fe.setInputCloud(pts);
     fe.setInputNormals(normals);
     fe.setSearchMethod(std::make_shared<pcl::search::KdTree<pcl::PointXYZ>>());
@@ -145,41 +149,19 @@ void bm_fpfh_pcl(benchmark::State& state) {
     benchmark::DoNotOptimize(out.points.data());
   }
   finish(state);
+}
+
+void bm_normals_pcl(benchmark::State& state) { pcl_normals<pcl::NormalEstimation<pcl::PointXYZ, pcl::Normal>>(state); }
+void bm_fpfh_pcl(benchmark::State& state) {
+  pcl_fpfh<pcl::FPFHEstimation<pcl::PointXYZ, pcl::Normal, pcl::FPFHSignature33>>(state);
 }
 
 // PCL's OpenMP estimators, the same work on N threads.
 void bm_normals_pcl_omp(benchmark::State& state, int threads) {
-  if (!require(state)) return;
-  const auto pts = pcl_points();
-  pcl::PointCloud<pcl::Normal> out;
-  for (auto _ : state) {
-    pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> ne(static_cast<unsigned>(threads));
-    ne.setInputCloud(pts);
-    ne.setSearchMethod(std::make_shared<pcl::search::KdTree<pcl::PointXYZ>>());
-    ne.setRadiusSearch(kRadius);
-    ne.setViewPoint(0.0f, 0.0f, 0.0f);
-    ne.compute(out);
-    benchmark::DoNotOptimize(out.points.data());
-  }
-  finish(state);
+  pcl_normals<pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal>>(state, static_cast<unsigned>(threads));
 }
-
 void bm_fpfh_pcl_omp(benchmark::State& state, int threads) {
-  if (!require(state)) return;
-  const auto pts = pcl_points();
-  auto normals = std::make_shared<pcl::PointCloud<pcl::Normal>>();
-  for (const auto& n : cloud().normals) normals->push_back(pcl::Normal(n.x(), n.y(), n.z()));
-  pcl::PointCloud<pcl::FPFHSignature33> out;
-  for (auto _ : state) {
-    pcl::FPFHEstimationOMP<pcl::PointXYZ, pcl::Normal, pcl::FPFHSignature33> fe(static_cast<unsigned>(threads));
-    fe.setInputCloud(pts);
-    fe.setInputNormals(normals);
-    fe.setSearchMethod(std::make_shared<pcl::search::KdTree<pcl::PointXYZ>>());
-    fe.setRadiusSearch(kRadius);
-    fe.compute(out);
-    benchmark::DoNotOptimize(out.points.data());
-  }
-  finish(state);
+  pcl_fpfh<pcl::FPFHEstimationOMP<pcl::PointXYZ, pcl::Normal, pcl::FPFHSignature33>>(state, static_cast<unsigned>(threads));
 }
 #endif
 
