@@ -5,9 +5,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <map>
 #include <tuple>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -131,6 +134,77 @@ TEST(VoxelHashMapTest, MaxAgeKeepsWhatRecentFramesFilled) {
   keep.insert({Vector3f(0.5f, 0.5f, 0.5f)});
   for (int i = 0; i < 100; ++i) keep.prune(Vector3d::Zero());
   EXPECT_EQ(keep.num_points(), 1u);
+}
+
+// Everything at once, against a plain list of voxels searched linearly: points in first-fill order
+// of their voxels and insertion order within one, the per-voxel cap, the distance, age and count
+// limits, over thousands of voxels (so the index grows, shrinks and is rebuilt many times),
+// negative coordinates and repeated clear().
+TEST(VoxelHashMapTest, MatchesALinearListOfVoxelsInOrder) {
+  struct RefVoxel {
+    std::tuple<int, int, int> key;
+    std::vector<Vector3f> points;
+    std::uint64_t touched = 0;
+  };
+  VoxelHashMapSettings s;
+  s.voxel_size = 0.7;
+  s.max_points_per_voxel = 3;
+  s.max_distance = 9.0;
+  s.max_voxels = 1500;
+  s.max_age = 4;
+  VoxelHashMap map(s);
+  std::vector<RefVoxel> ref;
+  std::uint64_t generation = 0;
+  Rng rng(23);
+  for (int frame = 0; frame < 60; ++frame) {
+    if (frame == 40) {  // start afresh
+      map.clear();
+      ref.clear();
+      generation = 0;
+    }
+    const Vector3d c(0.3 * frame - 6.0, -0.2 * frame, 0.0);
+    std::vector<Vector3f> pts;
+    for (int i = 0; i < 900; ++i) {
+      pts.emplace_back(static_cast<float>(c.x() + rng.uniform(-8.0, 8.0)), static_cast<float>(c.y() + rng.uniform(-8.0, 8.0)),
+                       static_cast<float>(rng.uniform(-2.0, 2.0)));
+    }
+    map.insert(pts);
+    for (const Vector3f& p : pts) {
+      const auto k = std::make_tuple(static_cast<int>(std::floor(static_cast<double>(p.x()) / 0.7)),
+                                     static_cast<int>(std::floor(static_cast<double>(p.y()) / 0.7)),
+                                     static_cast<int>(std::floor(static_cast<double>(p.z()) / 0.7)));
+      auto it = std::find_if(ref.begin(), ref.end(), [&](const RefVoxel& v) { return v.key == k; });
+      if (it == ref.end()) it = ref.insert(ref.end(), RefVoxel{k, {}, generation});
+      if (it->points.size() < 3) {
+        it->points.push_back(p);
+        it->touched = generation;
+      }
+    }
+    map.prune(c);
+    std::vector<std::pair<double, std::size_t>> keep;
+    for (std::size_t i = 0; i < ref.size(); ++i) {
+      const Vector3d centre = (Vector3d(std::get<0>(ref[i].key), std::get<1>(ref[i].key), std::get<2>(ref[i].key)) +
+                               Vector3d::Constant(0.5)) * 0.7;
+      const double d_sq = (centre - c).squaredNorm();
+      if (d_sq <= 81.0 && generation - ref[i].touched < 4) keep.emplace_back(d_sq, i);
+    }
+    ++generation;
+    if (keep.size() > s.max_voxels) {
+      std::stable_sort(keep.begin(), keep.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+      keep.resize(s.max_voxels);
+      std::sort(keep.begin(), keep.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+    }
+    std::vector<RefVoxel> kept;
+    for (const auto& e : keep) kept.push_back(ref[e.second]);
+    ref = std::move(kept);
+
+    std::vector<Vector3f> want;
+    for (const RefVoxel& v : ref) want.insert(want.end(), v.points.begin(), v.points.end());
+    ASSERT_EQ(map.num_voxels(), ref.size()) << "frame " << frame;
+    ASSERT_EQ(map.num_points(), want.size()) << "frame " << frame;
+    ASSERT_EQ(map.points(), want) << "frame " << frame;
+  }
+  EXPECT_GT(map.num_voxels(), 1000u);  // the count limit was in play at the end
 }
 
 TEST(VoxelHashMapTest, BadSettingsThrow) {
