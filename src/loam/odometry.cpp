@@ -400,6 +400,7 @@ void loam_associate_map(const LoamMap& map, const LoamFeatures& cur, const Eigen
                     [&](std::size_t begin, std::size_t end, std::vector<LoamCorrespondence>& out) {
       std::size_t idx[64];
       float d[64];
+      std::size_t chunk_hits = 0, chunk_searches = 0;  // written once: the chunks' counters share cache lines
       Vector3d mean;
       Eigen::SelfAdjointEigenSolver<Matrix3d> eig;
       for (std::size_t i = begin; i < end; ++i) {
@@ -409,13 +410,13 @@ void loam_associate_map(const LoamMap& map, const LoamFeatures& cur, const Eigen
         std::size_t found = 0;
         LoamMapCache::Entry* e = slot ? &slot->entries[i] : nullptr;
         if (e != nullptr && nearest_from_cache(*e, q, kk, max_sq, features, idx, d, found)) {
-          ++hits[begin / kGrain];
+          ++chunk_hits;
         } else {
           // Bounded by the gate: a query whose k-th neighbour lies beyond it finds fewer than k
           // (and is dropped, as it would be), and the search prunes what lies beyond from the start.
           found = tree->knn(q, k_search, idx, d, max_sq);
           if (e != nullptr) {
-            ++searches[begin / kGrain];
+            ++chunk_searches;
             e->at = q;
             e->num_near = static_cast<std::uint8_t>(found);
             for (std::size_t j = 0; j < found; ++j) e->near[j] = static_cast<std::uint32_t>(idx[j]);
@@ -441,6 +442,10 @@ void loam_associate_map(const LoamMap& map, const LoamFeatures& cur, const Eigen
           e->has_factor = out.size() > before;
           if (e->has_factor) e->factor = out.back();
         }
+      }
+      if (slot != nullptr) {
+        hits[begin / kGrain] = chunk_hits;
+        searches[begin / kGrain] = chunk_searches;
       }
     });
     if (slot != nullptr) {
