@@ -60,6 +60,27 @@ TEST(ParallelTest, UsesSeveralThreadsWhenAsked) {
   EXPECT_EQ(peak.load(), 2);
 }
 
+TEST(ParallelTest, NestedAndConcurrentCallsEachRunEveryChunkOnce) {
+  // Worker threads outlive the calls and are shared: calls made from inside a chunk, and calls made
+  // at once from several threads, must each finish with every chunk run once, whatever the workers
+  // are busy with.
+  constexpr std::size_t kOuter = 24, kInner = 17;
+  auto nested = [&](int threads) {
+    std::vector<std::atomic<int>> runs(kOuter * kInner);
+    parallel_chunks(threads, kOuter, [&](std::size_t c) {
+      parallel_chunks(threads, kInner, [&](std::size_t i) { runs[c * kInner + i].fetch_add(1); });
+    });
+    int wrong = 0;
+    for (const std::atomic<int>& r : runs) wrong += r.load() == 1 ? 0 : 1;
+    return wrong;
+  };
+  for (int threads : {2, 3, 8}) {
+    std::vector<std::future<int>> callers;
+    for (int k = 0; k < 4; ++k) callers.push_back(std::async(std::launch::async, nested, threads));
+    for (std::future<int>& f : callers) EXPECT_EQ(f.get(), 0) << "threads " << threads;
+  }
+}
+
 TEST(ParallelTest, AppendKeepsItemOrderForAnyThreadCount) {
   // Item i appends i % 3 copies of i: the expected sequence is built by a plain loop.
   const std::size_t n = 10007;

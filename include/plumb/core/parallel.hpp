@@ -11,8 +11,12 @@
 /// gives bit-identical results on 1, 2 or 64 threads (floating-point sums included, since they are
 /// summed in the same order), which the tests check for every algorithm that takes a thread count.
 ///
-/// Threads are started per call and joined before it returns (no pool, no global state): the cost,
-/// some tens of microseconds, is why each user picks a grain of at least a few hundred points.
+/// The helper threads of parallel_chunks() come from a pool kept for the life of the process,
+/// started the first time a call asks for them (starting a thread costs some tens of
+/// microseconds, and the per-frame loops make several calls a frame). The calling thread always
+/// works on its own chunks too, so a call finishes even when every worker is busy, nested and
+/// concurrent calls included; it returns once no thread touches its chunks any more. Each user
+/// still picks a grain of at least a few hundred points: waking a worker is not free either.
 
 #include <chrono>
 #include <cstddef>
