@@ -22,6 +22,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "plumb/core/allocator.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/version.hpp"
 #include "cli_support.hpp"
@@ -56,6 +57,9 @@ void register_all_commands(CLI::App& app) {
 }  // namespace plumb::cli
 
 int main(int argc, char** argv) {
+  // Every subcommand streams frames whose buffers are freed and made again each frame: keep the
+  // freed memory for the next frame instead of faulting it in again (core/allocator.hpp).
+  plumb::keep_freed_memory();
   CLI::App app{"plumb: BIM-anchored LiDAR odometry tools", "plumb"};
   app.set_version_flag("--version", std::string("plumb ") + PLUMB_VERSION_STRING,
                        "Print the version and exit");

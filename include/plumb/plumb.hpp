@@ -7,6 +7,7 @@
 
 #include "plumb/version.hpp"
 
+#include "plumb/core/allocator.hpp"
 #include "plumb/core/as_built.hpp"
 #include "plumb/core/clock.hpp"
 #include "plumb/core/deskew.hpp"

@@ -3,6 +3,7 @@
 #include <cstdint>
 
 #include "convert.hpp"
+#include "plumb/core/allocator.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/core/point_cloud.hpp"
 #include "plumb/core/status.hpp"
@@ -148,6 +149,10 @@ void bind_trajectory(py::module_& m) {
 void bind_core(py::module_& m) {
   py::register_exception<Error>(m, "Error", PyExc_RuntimeError);
   m.def("version", &plumb::version, "The version of the compiled plumb library.");
+  m.def("keep_freed_memory", &plumb::keep_freed_memory,
+        "Ask glibc's allocator to keep freed memory for reuse (mmap threshold 32 MiB, trim threshold\n"
+        "64 MiB) instead of faulting a frame's buffers in again every frame. Affects the whole\n"
+        "process. True when applied, False where the C library has no such setting.");
 
   py::enum_<Status>(m, "Status", "Outcome of an algorithm; failure to converge is a Status, never an exception.")
       .value("ok", Status::kOk)

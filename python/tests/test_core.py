@@ -2,7 +2,9 @@
 """plumb.__version__, plumb.Error, PointCloud and Trajectory: array conventions and validation."""
 
 import pathlib
+import platform
 import re
+import resource
 
 import numpy as np
 import pytest
@@ -15,6 +17,24 @@ def test_version_is_the_project_version():
     project_version = re.search(r"project\(plumb VERSION (\d+\.\d+\.\d+)", cmake).group(1)
     assert plumb.__version__ == project_version
     assert plumb.version() == project_version
+
+
+@pytest.mark.skipif(platform.libc_ver()[0] != "glibc", reason="keep_freed_memory() applies to glibc only")
+def test_keep_freed_memory_serves_each_frame_from_the_last_ones_memory():
+    assert plumb.keep_freed_memory()
+
+    def frame(i):  # a frame's worth of buffers, ~1.2 MiB each, touched and freed
+        a = np.ones(300_000 + 1000 * i, dtype=np.float32)
+        b = np.full(310_000, 2.0, dtype=np.float32)
+        return float(a[-1] + b[-1])
+
+    frame(0)
+    frame(1)
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+    for i in range(2, 42):
+        frame(i)
+    pages_per_frame = 2 * 300_000 * 4 // 4096
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before < 2 * pages_per_frame
 
 
 def test_error_is_a_runtime_error():
