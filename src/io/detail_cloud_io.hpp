@@ -33,9 +33,13 @@ inline std::vector<char> slurp_file(const std::string& path) {
   std::vector<char> data;
   if (std::fseek(f, 0, SEEK_END) == 0) {
     const long size = std::ftell(f);
-    if (size > 0) data.reserve(static_cast<std::size_t>(size));
     std::fseek(f, 0, SEEK_SET);
+    if (size > 0) {  // straight into place (a large fread bypasses stdio's buffer)
+      data.resize(static_cast<std::size_t>(size));
+      data.resize(std::fread(data.data(), 1, data.size(), f));
+    }
   }
+  // Whatever the size did not cover (a file that grew, or one whose size is unknown).
   char chunk[1 << 16];
   std::size_t got = 0;
   while ((got = std::fread(chunk, 1, sizeof(chunk), f)) > 0) data.insert(data.end(), chunk, chunk + got);
