@@ -8,7 +8,8 @@
 // lio_frame/plumb/site16: one frame of the LiDAR/IMU hybrid odometry (deskew, features, joint
 // IMU + LiDAR solve, local map update) on a simulated 16-line site run around FZK-Haus
 // (vlp16 + 300 Hz IMU, simulated once before timing), frames processed in order;
-// lio_frame_icp the same frames all sent to the hybrid's ICP residuals.
+// lio_frame_icp the same frames all sent to the hybrid's ICP residuals; local_map_update/plumb/site16
+// the upkeep of the LIO's point map alone over the same frames.
 #include <benchmark/benchmark.h>
 
 #include <filesystem>
@@ -26,6 +27,7 @@
 #include "plumb/io/frame_dump.hpp"
 #include "plumb/io/pcd.hpp"
 #include "plumb/loam/features.hpp"
+#include "plumb/loam/local_map.hpp"
 #include "plumb/loam/odometry.hpp"
 #include "plumb/loam/range_image.hpp"
 #include "plumb/pipeline/hybrid_lio.hpp"
@@ -105,6 +107,7 @@ struct SiteRun {
   std::vector<double> stamps;
   std::vector<ImuSample> imu;
   Eigen::Isometry3d T0 = Eigen::Isometry3d::Identity();
+  std::vector<Eigen::Isometry3d> T_world_lidar;  ///< per frame, from the simulator's ground truth
   HybridLioSettings settings;
 };
 
@@ -125,6 +128,9 @@ const SiteRun& site16() {
   }
   run->imu = dump.imu();
   run->T0 = dump.ground_truth().poses.front();
+  for (const Eigen::Isometry3d& T_world_base : dump.ground_truth().poses) {
+    run->T_world_lidar.push_back(T_world_base * dump.meta().T_base_lidar);
+  }
   run->settings.T_base_lidar = dump.meta().T_base_lidar;
   run->settings.T_base_imu = dump.meta().T_base_imu;
   std::filesystem::remove_all(dir);
@@ -152,6 +158,33 @@ void BM_LioFrame(benchmark::State& state, LioMode mode, bool every_frame_icp, in
   });
   state.counters["points_per_frame"] = static_cast<double>(run.frames.back().size());
 }
+
+// The LIO's ICP point map kept over the run (HybridLio's default point_map settings): each frame
+// at its true pose inserted, then the map pruned around the sensor. Returns beyond the map's
+// 60 m reach are inserted and dropped again every frame, which is what made the upkeep costly in
+// whole runs when a prune rebuilt the map's index.
+void BM_LocalMapUpdate(benchmark::State& state) {
+  const SiteRun& run = site16();
+  if (run.T_world_lidar.size() != run.frames.size()) {
+    state.SkipWithError("ground truth and frames differ in number");
+    return;
+  }
+  const VoxelHashMapSettings settings = run.settings.map.point_map;
+  std::unique_ptr<VoxelHashMap> map;
+  std::vector<Vector3f> world;
+  auto restart = [&] { map = std::make_unique<VoxelHashMap>(settings); };
+  restart();
+  bench::time_frames_in_order(state, 0, run.frames.size(), restart, [&](std::size_t i) {
+    const Eigen::Matrix3f R = run.T_world_lidar[i].linear().cast<float>();
+    const Eigen::Vector3f t = run.T_world_lidar[i].translation().cast<float>();
+    world.clear();
+    for (const Vector3f& p : run.frames[i].points) world.push_back(R * p + t);
+    map->insert(world);
+    map->prune(run.T_world_lidar[i].translation());
+    benchmark::DoNotOptimize(map->num_points());
+  });
+}
+BENCHMARK(BM_LocalMapUpdate)->Name("local_map_update/plumb/site16")->Unit(benchmark::kMillisecond);
 
 BENCHMARK_CAPTURE(BM_LioFrame, site16, LioMode::kHybrid, false)->Name("lio_frame/plumb/site16")->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_LioFrame, site16_icp, LioMode::kHybrid, true)
