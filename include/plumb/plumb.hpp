@@ -16,6 +16,7 @@
 #include "plumb/core/levenberg_marquardt.hpp"
 #include "plumb/core/lie.hpp"
 #include "plumb/core/parallel.hpp"
+#include "plumb/core/prefetch.hpp"
 #include "plumb/core/point_cloud.hpp"
 #include "plumb/core/pose2.hpp"
 #include "plumb/core/rng.hpp"

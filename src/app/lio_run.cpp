@@ -11,6 +11,7 @@
 #include "plumb/app/run.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/core/parallel.hpp"
+#include "plumb/core/prefetch.hpp"
 #include "plumb/core/types.hpp"
 #include "plumb/eval/metrics.hpp"
 

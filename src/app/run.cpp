@@ -15,6 +15,7 @@
 #include "plumb/core/deskew.hpp"
 #include "plumb/core/error.hpp"
 #include "plumb/core/parallel.hpp"
+#include "plumb/core/prefetch.hpp"
 #include "plumb/core/sensor_data.hpp"
 #include "plumb/eval/metrics.hpp"
 
@@ -177,7 +178,11 @@ void track_frames(const io::FrameDumpReader& dump, const bim::BimMesh& mesh, con
   // A pipeline of three stages (with threads != 1): reading and deskewing frame i + 2, its cut to a
   // planar scan and the front end's match; the key points of frame i + 1 (they depend on the frame
   // alone); the BIM correction of frame i. Each stage sees the frames in order: the results of a
-  // serial loop.
+  // serial loop. Each stage runs up to kStageDepth frames ahead of the next: a stage's cost varies
+  // from frame to frame (the registration's rounds, the scan's points), and with one frame of slack
+  // the stages kept waiting for each other (docs/results.md, "Threads": the two-thread speed-up
+  // against the depth).
+  constexpr std::size_t kStageDepth = 3;
   struct Matched {
     PointCloud frame;
     BimFrameInput input;
@@ -188,12 +193,12 @@ void track_frames(const io::FrameDumpReader& dump, const bim::BimMesh& mesh, con
     m.input = odometry.prepare_scan(m.frame, dump.stamp(i), i);
     odometry.front_end(m.input, odom.at(dump.stamp(i)));
     return m;
-  });
+  }, kStageDepth);
   Prefetch<BimFrameInput> frames(settings.odometry.threads, n, [&](std::size_t i) {
     Matched m = matched.get(i);
     odometry.add_key_points(m.input, m.frame);
     return std::move(m.input);
-  });
+  }, kStageDepth);
   for (std::size_t i = 0; i < n; ++i) {
     const double stamp = dump.stamp(i);
     const Pose2 o = odom.at(stamp);

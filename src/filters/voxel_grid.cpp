@@ -8,6 +8,10 @@
 #include <limits>
 #include <vector>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "plumb/core/error.hpp"
 #include "plumb/core/point_cloud.hpp"
 #include "plumb/core/status.hpp"
@@ -71,7 +75,56 @@ FiniteBounds finite_bounds(const std::vector<Vector3f>& pts) {
   float lo_x = std::numeric_limits<float>::infinity(), lo_y = lo_x, lo_z = lo_x;
   float hi_x = -lo_x, hi_y = hi_x, hi_z = hi_x;
   std::size_t num_finite = 0;
-  for (std::size_t i = 0; i < n; ++i) {
+  std::size_t i = 0;
+#if defined(__SSE2__)
+  // One point per register (x, y, z and the next point's x, which is masked off), two points per
+  // step into two sets of accumulators so that consecutive min/max chains overlap. A point with a
+  // NaN or infinite coordinate is replaced by (+inf for the minimum, -inf for the maximum) without
+  // a branch: LiDAR frames mix finite points and no-returns unpredictably. Min and max of floats
+  // are exact, so the bounds are the scalar loop's (a zero's sign aside, which no key sees).
+  static_assert(sizeof(Vector3f) == 3 * sizeof(float), "Vector3f is three packed floats");
+  if (n >= 2) {
+    const float* p = pts[0].data();
+    const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
+    const __m128 minus_inf = _mm_sub_ps(_mm_setzero_ps(), inf);
+    __m128 lo = inf, lo2 = inf, hi = minus_inf, hi2 = minus_inf;
+    __m128i count = _mm_setzero_si128();
+    // A point's mask: all ones when its three coordinates are finite (x - x is 0 for a finite x,
+    // NaN otherwise), else zero.
+    const auto finite_mask = [](__m128 v) {
+      const __m128 d = _mm_sub_ps(v, v);
+      const int lanes = _mm_movemask_ps(_mm_cmpeq_ps(d, _mm_setzero_ps())) & 7;
+      return _mm_castsi128_ps(_mm_set1_epi32(-static_cast<int>(lanes == 7)));
+    };
+    // The last point is read alone below: its register would reach past the array's end.
+    for (; i + 3 <= n; i += 2, p += 6) {
+      const __m128 v = _mm_loadu_ps(p);
+      const __m128 v2 = _mm_loadu_ps(p + 3);
+      const __m128 m = finite_mask(v), m2 = finite_mask(v2);
+      lo = _mm_min_ps(_mm_or_ps(_mm_and_ps(m, v), _mm_andnot_ps(m, inf)), lo);
+      hi = _mm_max_ps(_mm_or_ps(_mm_and_ps(m, v), _mm_andnot_ps(m, minus_inf)), hi);
+      lo2 = _mm_min_ps(_mm_or_ps(_mm_and_ps(m2, v2), _mm_andnot_ps(m2, inf)), lo2);
+      hi2 = _mm_max_ps(_mm_or_ps(_mm_and_ps(m2, v2), _mm_andnot_ps(m2, minus_inf)), hi2);
+      // Each 64-bit lane counts the finite points (a mask lane is -1).
+      count = _mm_sub_epi64(_mm_sub_epi64(count, _mm_castps_si128(m)), _mm_castps_si128(m2));
+    }
+    lo = _mm_min_ps(lo, lo2);
+    hi = _mm_max_ps(hi, hi2);
+    alignas(16) float l[4], h[4];
+    alignas(16) std::int64_t c[2];
+    _mm_store_ps(l, lo);
+    _mm_store_ps(h, hi);
+    _mm_store_si128(reinterpret_cast<__m128i*>(c), count);
+    lo_x = l[0];
+    lo_y = l[1];
+    lo_z = l[2];
+    hi_x = h[0];
+    hi_y = h[1];
+    hi_z = h[2];
+    num_finite = static_cast<std::size_t>(c[0]);
+  }
+#endif
+  for (; i < n; ++i) {
     const float x = pts[i][0], y = pts[i][1], z = pts[i][2];
     if (!((x - x) + (y - y) + (z - z) == 0.0f)) continue;  // NaN unless all three are finite
     lo_x = std::min(lo_x, x);

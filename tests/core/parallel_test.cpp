@@ -1,8 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The parallel layer: every chunk runs exactly once on any thread count, outputs come back in item
 // order (the same as one sequential pass), a floating-point sum over chunk partials is the same bit
-// for bit on 1..16 threads, and errors are reported as the lowest failing chunk's whatever the count;
-// a prefetch stage gives the items of the serial loop, made one ahead, and its errors where that loop meets them.
+// for bit on 1..16 threads, and errors are reported as the lowest failing chunk's whatever the count.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -170,73 +169,6 @@ TEST(ParallelTest, StartBesideRunsOnASecondThreadOrOnTheCallersAtGet) {
     } catch (const std::runtime_error& e) {
       EXPECT_STREQ(e.what(), "beside");
     }
-  }
-}
-
-TEST(ParallelTest, PrefetchGivesTheSerialItemsAndMakesTheNextOneAhead) {
-  constexpr std::size_t kItems = 20;
-  for (int threads : {1, 2, 0}) {
-    std::vector<std::atomic<int>> made(kItems);
-    std::size_t ahead = 0;  // items whose successor began while the consumer held them
-    {
-      Prefetch<std::vector<int>> items(threads, kItems, [&](std::size_t i) {
-        made[i].fetch_add(1);
-        return std::vector<int>(i + 1, static_cast<int>(i));
-      });
-      for (std::size_t i = 0; i < kItems; ++i) {
-        const std::vector<int> item = items.get(i);
-        ASSERT_EQ(item, std::vector<int>(i + 1, static_cast<int>(i))) << "threads " << threads;
-        if (i + 1 == kItems) continue;
-        // With a second thread, item i + 1 is begun while this one is held: wait for it (on a
-        // loaded machine the thread may take a while to run). On one thread it is made only when
-        // asked for, so it must not begin however long this item is held.
-        const auto until = std::chrono::steady_clock::now() + (threads == 1 ? std::chrono::milliseconds(2)
-                                                                            : std::chrono::milliseconds(20000));
-        while (made[i + 1].load() == 0 && std::chrono::steady_clock::now() < until) {
-          std::this_thread::sleep_for(std::chrono::microseconds(50));
-        }
-        ahead += made[i + 1].load() > 0 ? 1 : 0;
-      }
-    }
-    for (std::size_t i = 0; i < kItems; ++i) EXPECT_EQ(made[i].load(), 1) << "item " << i << ", threads " << threads;
-    EXPECT_EQ(ahead, threads == 1 ? 0u : kItems - 1) << "threads " << threads;
-  }
-}
-
-TEST(ParallelTest, PrefetchRethrowsAnItemsErrorWhereTheSerialLoopMeetsIt) {
-  for (int threads : {1, 2}) {
-    std::size_t got = 0;
-    try {
-      Prefetch<int> items(threads, 10, [](std::size_t i) -> int {
-        if (i == 4) throw std::runtime_error("item 4");
-        return static_cast<int>(i);
-      });
-      for (std::size_t i = 0; i < 10; ++i) {
-        EXPECT_EQ(items.get(i), static_cast<int>(i));
-        ++got;
-      }
-      ADD_FAILURE() << "no exception, threads " << threads;
-    } catch (const std::runtime_error& e) {
-      EXPECT_STREQ(e.what(), "item 4");
-    }
-    EXPECT_EQ(got, 4u) << "threads " << threads;  // items 0-3 came before the error
-  }
-  // Stopping early and asking out of order: the item made ahead is dropped, the one asked for made.
-  // On one thread the item that would have come next is never made at all.
-  for (int threads : {1, 2}) {
-    std::vector<std::atomic<int>> made(10);
-    {
-      Prefetch<int> items(threads, 10, [&made](std::size_t i) {
-        made[i].fetch_add(1);
-        return static_cast<int>(i) * 3;
-      });
-      EXPECT_EQ(items.get(0), 0);
-      EXPECT_EQ(items.get(5), 15);
-      EXPECT_EQ(items.get(6), 18);
-    }
-    EXPECT_EQ(made[0].load() + made[5].load() + made[6].load(), 3) << "threads " << threads;
-    EXPECT_EQ(made[1].load(), threads == 1 ? 0 : 1);
-    EXPECT_EQ(made[7].load(), threads == 1 ? 0 : 1);
   }
 }
 

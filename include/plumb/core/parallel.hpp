@@ -18,7 +18,6 @@
 /// concurrent calls included; it returns once no thread touches its chunks any more. Each user
 /// still picks a grain of at least a few hundred points: waking a worker is not free either.
 
-#include <chrono>
 #include <cstddef>
 #include <functional>
 #include <future>
@@ -106,50 +105,5 @@ auto start_beside(int threads, F f) -> std::future<std::invoke_result_t<F&>> {
   }
   return std::async(std::launch::deferred, std::move(call));
 }
-
-/// @brief A pipeline stage: items 0, 1, 2, ... made by `make(i)` one ahead of their consumer, on a
-///        second thread, while the consumer works on the item before (reading and deskewing the
-///        next frame while the estimator processes this one).
-///
-/// `make` must depend on i alone, never on what the consumer did with earlier items: the items,
-/// and so everything computed from them, are then the same for any thread count. With threads == 1
-/// (or when the system refuses a thread) each item is made on the calling thread when asked for
-/// (start_beside()). An exception of make(i) is rethrown by get(i), where the serial loop would
-/// have met it. At most two items exist at once, and make() never runs twice at once.
-template <class T>
-class Prefetch {
- public:
-  /// @param threads the caller's thread setting (1 = no second thread; 0 = every core, as >= 2)
-  /// @param n number of items; get() is called with i = 0, 1, ... (it may stop early)
-  Prefetch(int threads, std::size_t n, std::function<T(std::size_t)> make)
-      : threads_(threads), n_(n), make_(std::move(make)) {}
-  Prefetch(const Prefetch&) = delete;
-  Prefetch& operator=(const Prefetch&) = delete;
-  ~Prefetch() { settle(pending_); }
-
-  /// @brief Item i (i = the previous call's i + 1, starting at 0); starts making item i + 1.
-  T get(std::size_t i) {
-    std::future<T> ahead = std::move(pending_);
-    const bool made_ahead = ahead.valid() && pending_index_ == i;
-    if (!made_ahead) settle(ahead);  // out of order: the item made ahead is dropped
-    T item = made_ahead ? ahead.get() : make_(i);
-    if (i + 1 < n_) {
-      pending_ = start_beside(threads_, [this, next = i + 1] { return make_(next); });
-      pending_index_ = i + 1;
-    }
-    return item;
-  }
-
- private:
-  // Waits for an item being made on the other thread; a deferred one is never made.
-  static void settle(std::future<T>& f) {
-    if (f.valid() && f.wait_for(std::chrono::seconds(0)) != std::future_status::deferred) f.wait();
-  }
-  int threads_;
-  std::size_t n_;
-  std::function<T(std::size_t)> make_;
-  std::future<T> pending_;
-  std::size_t pending_index_ = 0;
-};
 
 }  // namespace plumb
