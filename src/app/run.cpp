@@ -175,10 +175,10 @@ void track_frames(const io::FrameDumpReader& dump, const bim::BimMesh& mesh, con
   BimOdometry odometry(std::move(bim_cloud), report.T_world_base0, os);
   const Pose2 odom0 = odom.at(dump.stamp(0));
   const auto t_frames = std::chrono::steady_clock::now();
-  // A pipeline of three stages (with threads != 1): reading and deskewing frame i + 2, its cut to a
-  // planar scan and the front end's match; the key points of frame i + 1 (they depend on the frame
-  // alone); the BIM correction of frame i. Each stage sees the frames in order: the results of a
-  // serial loop. Each stage runs up to kStageDepth frames ahead of the next: a stage's cost varies
+  // A pipeline of three stages (with threads != 1): reading and deskewing a frame, its cut to a
+  // planar scan and the front end's match; the frame's key points (they depend on the frame alone);
+  // its BIM correction. Each stage sees the frames in order: the results of a serial loop. Each
+  // stage runs up to kStageDepth frames ahead of the next: a stage's cost varies
   // from frame to frame (the registration's rounds, the scan's points), and with one frame of slack
   // the stages kept waiting for each other (docs/results.md, "Threads": the two-thread speed-up
   // against the depth).
