@@ -36,6 +36,7 @@ struct RunOptions {
   bool json = false;
   bool no_bim = false;
   bool as_built = false;
+  bool refine = false;
   double tolerance = 0.02;
   double as_built_sigma = 0.01;
   double as_built_deg = 0.2;
@@ -61,6 +62,7 @@ void run(const RunOptions& o) {
   settings.odometry.threads = resolve_thread_count(o.threads);
   settings.localizer.threads = settings.odometry.threads;
   settings.odometry.estimate_as_built = o.as_built;
+  settings.refine_as_built = o.refine;
   settings.deviation_tolerance = o.tolerance;
   settings.odometry.as_built.sigma_translation = o.as_built_sigma;
   settings.odometry.as_built.sigma_rotation = o.as_built_deg * kPi / 180.0;
@@ -83,7 +85,8 @@ void run(const RunOptions& o) {
     std::cout << j.dump(2) << '\n';
   } else {
     print_run_summary(r);
-    std::printf("wrote %s/{wheel,lidar,bim}.tum, report.json, trajectory.svg\n", o.out_dir.c_str());
+    std::printf("wrote %s/{wheel,lidar,bim%s}.tum, report.json, trajectory.svg\n", o.out_dir.c_str(),
+                r.bim_refined.empty() ? "" : ",bim_refined");
     if (!r.deviations.empty()) {
       std::printf("as built: %s\n", deviation_summary(r.deviations, r.deviation_tolerance).c_str());
       std::printf("wrote %s/deviations.{json,csv,svg,bcf}\n", o.out_dir.c_str());
@@ -117,9 +120,14 @@ void register_run_command(CLI::App& app) {
   cmd->add_option("-o,--output", o->out_dir, "Output directory")->required();
   cmd->add_flag("--json", o->json, "Print the report as JSON");
   cmd->add_flag("--no-bim", o->no_bim, "Plain scan-matching odometry (no BIM corrections)");
-  cmd->add_flag("--as-built", o->as_built,
-                "Estimate each element's deviation from the design while driving and register to the "
-                "building as estimated; writes deviations.json, .csv, .svg (floor plan) and .bcf (issues for BIM viewers)");
+  CLI::Option* as_built = cmd->add_flag(
+      "--as-built", o->as_built,
+      "Estimate each element's deviation from the design while driving and register to the "
+      "building as estimated; writes deviations.json, .csv, .svg (floor plan) and .bcf (issues for BIM viewers)");
+  cmd->add_flag("--refine", o->refine,
+                "With --as-built: after the run, register every frame again, from the same start, to the building "
+                "as estimated at its end; writes bim_refined.tum (offline: the frames are processed twice)")
+      ->needs(as_built);
   cmd->add_option("--tolerance", o->tolerance,
                   "Construction tolerance the --as-built deviations are judged against [m] (default 0.02)")
       ->check(CLI::PositiveNumber);

@@ -83,9 +83,9 @@ const std::vector<std::string>& frame_dump_names() {
 }
 
 const std::vector<std::string>& run_output_names() {
-  static const std::vector<std::string> names = {"report.json",    "wheel.tum",      "lidar.tum",      "bim.tum",
-                                                 "trajectory.svg", "deviations.json", "deviations.csv",
-                                                 "deviations.svg", "deviations.bcf"};
+  static const std::vector<std::string> names = {
+      "report.json",    "wheel.tum",       "lidar.tum",      "bim.tum",        "bim_refined.tum",
+      "trajectory.svg", "deviations.json", "deviations.csv", "deviations.svg", "deviations.bcf"};
   return names;
 }
 
@@ -219,6 +219,7 @@ nlohmann::json run_report_json(const RunReport& r) {
   j["fallbacks"] = r.fallbacks;
   j["seconds_localize"] = r.seconds_localize;
   j["seconds_frames"] = r.seconds_frames;
+  if (!r.bim_refined.empty()) j["seconds_refine"] = r.seconds_refine;
   j["frames_per_second"] = r.frames_per_second;
   j["mean_seconds_per_frame"] = {{"front_end", r.mean_seconds_front_end},
                                  {"segment", r.mean_seconds_segment},
@@ -229,15 +230,24 @@ nlohmann::json run_report_json(const RunReport& r) {
     j["initial_error"] = {{"xy", r.initial_error_xy}, {"yaw_deg", r.initial_error_yaw_deg}};
     j["path_length"] = r.path_length;
     nlohmann::json table = nlohmann::json::array();
+    const bool refined = !r.bim_refined.empty();
     for (const ObservationRow& row : r.table) {
-      table.push_back({{"point", row.name}, {"frame", row.frame}, {"distance", row.distance},
-                       {"wheel", {{"error", row.error_wheel}, {"percent", percent(row.error_wheel, row.distance)}}},
-                       {"lidar", {{"error", row.error_lidar}, {"percent", percent(row.error_lidar, row.distance)}}},
-                       {"bim", {{"error", row.error_bim}, {"percent", percent(row.error_bim, row.distance)}}}});
+      nlohmann::json t = {{"point", row.name}, {"frame", row.frame}, {"distance", row.distance},
+                          {"wheel", {{"error", row.error_wheel}, {"percent", percent(row.error_wheel, row.distance)}}},
+                          {"lidar", {{"error", row.error_lidar}, {"percent", percent(row.error_lidar, row.distance)}}},
+                          {"bim", {{"error", row.error_bim}, {"percent", percent(row.error_bim, row.distance)}}}};
+      if (refined) {
+        t["bim_refined"] = {{"error", row.error_refined}, {"percent", percent(row.error_refined, row.distance)}};
+      }
+      table.push_back(t);
     }
     j["table"] = table;
     j["ape_rmse_xy"] = {{"wheel", r.ape_rmse_wheel}, {"lidar", r.ape_rmse_lidar}, {"bim", r.ape_rmse_bim}};
     j["max_error_xy"] = {{"wheel", r.max_error_wheel}, {"lidar", r.max_error_lidar}, {"bim", r.max_error_bim}};
+    if (refined) {
+      j["ape_rmse_xy"]["bim_refined"] = r.ape_rmse_refined;
+      j["max_error_xy"]["bim_refined"] = r.max_error_refined;
+    }
     j["registration_error_xy"] = {
         {"count", r.registrations}, {"rms", r.registration_error_rms}, {"max", r.registration_error_max}};
   }
@@ -356,6 +366,7 @@ void write_run_outputs(const RunReport& r, const nlohmann::json& report, const b
   io::write_tum(r.wheel, out_dir + "/wheel.tum");
   io::write_tum(r.lidar, out_dir + "/lidar.tum");
   io::write_tum(r.bim, out_dir + "/bim.tum");
+  if (!r.bim_refined.empty()) io::write_tum(r.bim_refined, out_dir + "/bim_refined.tum");
   if (!r.deviations.empty()) {
     write_deviations(r, out_dir);
     write_deviation_views(r, mesh, out_dir, title, model_name);
@@ -371,6 +382,7 @@ void write_run_outputs(const RunReport& r, const nlohmann::json& report, const b
   plot.add_trajectory(r.wheel, "wheel odometry", "#d62728");
   plot.add_trajectory(r.lidar, "LiDAR (no BIM)", "#ff7f0e");
   plot.add_trajectory(r.bim, "BIM-corrected", "#2ca02c");
+  if (!r.bim_refined.empty()) plot.add_trajectory(r.bim_refined, "BIM-corrected, second pass", "#1f77b4");
   io::write_svg(plot, out_dir + "/trajectory.svg");
 }
 
@@ -412,6 +424,10 @@ void print_run_summary(const RunReport& r) {
               r.max_error_lidar, r.max_error_bim);
   std::printf("APE rmse (xy):   wheel %.3f m, LiDAR %.3f m, BIM-corrected %.3f m\n", r.ape_rmse_wheel,
               r.ape_rmse_lidar, r.ape_rmse_bim);
+  if (!r.bim_refined.empty()) {
+    std::printf("second pass over the building as estimated (bim_refined.tum): max error %.3f m, APE rmse %.3f m, "
+                "end %.3f m\n", r.max_error_refined, r.ape_rmse_refined, r.table.empty() ? 0.0 : r.table.back().error_refined);
+  }
   if (r.registrations > 0) {
     std::printf("BIM registration alone vs truth (xy, %zu frames): rms %.3f m, max %.3f m (the model's as-built deviations)\n",
                 r.registrations, r.registration_error_rms, r.registration_error_max);

@@ -38,14 +38,16 @@ void bind_run_settings(py::module_& m) {
       .def_readwrite("start_view_spacing", &RunSettings::start_view_spacing)
       .def_readwrite("deskew", &RunSettings::deskew)
       .def_readwrite("max_frames", &RunSettings::max_frames)
-      .def_readwrite("deviation_tolerance", &RunSettings::deviation_tolerance);
+      .def_readwrite("deviation_tolerance", &RunSettings::deviation_tolerance)
+      .def_readwrite("refine_as_built", &RunSettings::refine_as_built);
   py::class_<ObservationRow>(m, "ObservationRow", "One row of Liu et al. 2022, Table 2.")
       .def_readonly("name", &ObservationRow::name)
       .def_readonly("frame", &ObservationRow::frame)
       .def_readonly("distance", &ObservationRow::distance)
       .def_readonly("error_wheel", &ObservationRow::error_wheel)
       .def_readonly("error_lidar", &ObservationRow::error_lidar)
-      .def_readonly("error_bim", &ObservationRow::error_bim);
+      .def_readonly("error_bim", &ObservationRow::error_bim)
+      .def_readonly("error_refined", &ObservationRow::error_refined);
 }
 
 void bind_run_report(py::module_& m) {
@@ -53,6 +55,7 @@ void bind_run_report(py::module_& m) {
   r.def_readonly("wheel", &RunReport::wheel)
       .def_readonly("lidar", &RunReport::lidar)
       .def_readonly("bim", &RunReport::bim)
+      .def_readonly("bim_refined", &RunReport::bim_refined)
       .def_readonly("frames", &RunReport::frames)
       .def_readonly("frames_requested", &RunReport::frames_requested)
       .def_readonly("partial", &RunReport::partial)
@@ -71,6 +74,7 @@ void bind_run_report(py::module_& m) {
       .def_readonly("fallbacks", &RunReport::fallbacks)
       .def_readonly("seconds_localize", &RunReport::seconds_localize)
       .def_readonly("seconds_frames", &RunReport::seconds_frames)
+      .def_readonly("seconds_refine", &RunReport::seconds_refine)
       .def_readonly("frames_per_second", &RunReport::frames_per_second)
       .def_readonly("has_ground_truth", &RunReport::has_ground_truth)
       .def_readonly("ground_truth_note", &RunReport::ground_truth_note)
@@ -84,6 +88,8 @@ void bind_run_report(py::module_& m) {
       .def_readonly("max_error_wheel", &RunReport::max_error_wheel)
       .def_readonly("max_error_lidar", &RunReport::max_error_lidar)
       .def_readonly("max_error_bim", &RunReport::max_error_bim)
+      .def_readonly("ape_rmse_refined", &RunReport::ape_rmse_refined)
+      .def_readonly("max_error_refined", &RunReport::max_error_refined)
       .def_readonly("registrations", &RunReport::registrations)
       .def_readonly("registration_error_rms", &RunReport::registration_error_rms)
       .def_readonly("registration_error_max", &RunReport::registration_error_max)

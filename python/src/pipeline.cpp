@@ -168,6 +168,19 @@ void bind_bim_odometry(py::module_& m) {
           py::arg("mesh"), py::arg("tolerance") = 0.02,
           "The as-built deviation report so far: a DeviationReportRow per element of the BIM cloud, judged "
           "against `tolerance` [m]. `mesh` is the BimMesh the BIM cloud was sampled from.")
+      .def(
+          "register_to",
+          [](BimOdometry& o, const BimOdometry& estimated) {
+            PLUMB_CHECK(estimated.as_built() != nullptr,
+                        "BimOdometry.register_to: the odometry given does not estimate the as-built "
+                        "(construct it with estimate_as_built=True)");
+            py::gil_scoped_release release;
+            o.register_to(*estimated.as_built());
+          },
+          py::arg("estimated"),
+          "Register the frames from now on to the building as `estimated` (a BimOdometry with "
+          "estimate_as_built=True, e.g. after a first pass over the same frames) has estimated it so far: the "
+          "second pass of RunSettings.refine_as_built. This odometry must not estimate the as-built itself.")
       .def_property_readonly("settings", &BimOdometry::settings);
 }
 

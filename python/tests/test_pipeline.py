@@ -121,6 +121,37 @@ def test_as_built_deviations_equal_plumb_run(sim_run, run_cli, demo_model, build
         plumb.BimOdometry(bim_cloud, report.T_world_base0).deviation_report(mesh)
 
 
+def test_refined_run_equals_plumb_run_and_a_second_pass_by_hand(sim_run, run_cli, demo_model, building, tmp_path):
+    """refine_as_built from Python: run_bim_odometry's bim_refined is `plumb run --as-built --refine`'s
+    bim_refined.tum, and a BimOdometry registered by hand to a first pass's estimate gives the same poses."""
+    dump_dir = sim_run[0]
+    done = run_cli("run", dump_dir, "--bim", demo_model, "-o", tmp_path / "cli", "--as-built", "--refine")
+    assert done.returncode == 0, done.stderr
+    settings = plumb.RunSettings()
+    settings.odometry.estimate_as_built = True
+    settings.refine_as_built = True
+    report = plumb.run_bim_odometry(plumb.FrameDump(dump_dir), plumb.read_ifc(demo_model), settings=settings)
+    plumb.write_tum(report.bim_refined, tmp_path / "bim_refined.tum")
+    assert (tmp_path / "bim_refined.tum").read_bytes() == (tmp_path / "cli" / "bim_refined.tum").read_bytes()
+    assert report.seconds_refine > 0 and report.max_error_refined > 0
+    assert [row.error_refined > 0 for row in report.table] == [True] * 3
+
+    mesh, bim_cloud = building
+    dump = plumb.FrameDump(dump_dir)
+    odom = plumb.OdometryInterpolator(dump.odometry())
+    frames = [(stamp, plumb.deskew_frame(frame, stamp, dump.meta.T_base_lidar, odom)) for stamp, frame in dump]
+    kwargs = dict(T_base_lidar=dump.meta.T_base_lidar, threads=1)
+    first = plumb.BimOdometry(bim_cloud, report.T_world_base0, estimate_as_built=True, **kwargs)
+    for stamp, frame in frames:
+        first.process(frame, stamp, odom.at(stamp))
+    second = plumb.BimOdometry(bim_cloud, report.T_world_base0, **kwargs)
+    second.register_to(first)
+    poses = np.array([second.process(frame, stamp, odom.at(stamp)).T_world_base for stamp, frame in frames])
+    np.testing.assert_allclose(poses, report.bim_refined.poses, atol=1e-9)
+    with pytest.raises(plumb.Error, match="estimate_as_built"):
+        second.register_to(second)
+
+
 def cli_lio_settings(dump):
     """HybridLioSettings as `plumb lio` sets them by default (a map is started by 100 points or more)."""
     settings = plumb.HybridLioSettings()

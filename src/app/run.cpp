@@ -161,66 +161,73 @@ std::optional<PointCloud> place_first_frame(const io::FrameDumpReader& dump, con
   return first_frame;
 }
 
-// BimOdometry over frames [0, n): the three trajectories, the counts and the timing of the report,
-// and the deviation report when the as-built is estimated.
-void track_frames(const io::FrameDumpReader& dump, const bim::BimMesh& mesh, const OdometryInterpolator& odom,
-                  const FrameSource& frame_at, std::shared_ptr<const PointCloud> bim_cloud,
-                  std::optional<PointCloud> first_frame, const RunSettings& settings, RunReport& report) {
-  const std::size_t n = report.frames_requested;
-  BimOdometrySettings os = settings.odometry;
-  os.T_base_lidar = dump.meta().T_base_lidar;
-  // With threads, two of them prepare and match the next frames (below) all the time; the
-  // odometry's own parallel work (the registration's search) gets the others, if any.
-  if (settings.odometry.threads != 1) os.threads = std::max(1, resolve_thread_count(settings.odometry.threads) - 2);
-  BimOdometry odometry(std::move(bim_cloud), report.T_world_base0, os);
-  const Pose2 odom0 = odom.at(dump.stamp(0));
-  const auto t_frames = std::chrono::steady_clock::now();
-  // A pipeline of three stages (with threads != 1): reading and deskewing a frame, its cut to a
-  // planar scan and the front end's match; the frame's key points (they depend on the frame alone);
-  // its BIM correction. Each stage sees the frames in order: the results of a serial loop. Each
-  // stage runs up to kStageDepth frames ahead of the next: a stage's cost varies
-  // from frame to frame (the registration's rounds, the scan's points), and with one frame of slack
-  // the stages kept waiting for each other (docs/results.md, "Threads": the two-thread speed-up
-  // against the depth).
+// Frames [0, n) through `odometry`, `take(i, result)` called for each in frame order. With threads, a
+// pipeline of three stages: reading and deskewing a frame, its cut to a planar scan and the front
+// end's match; the frame's key points (they depend on the frame alone); its BIM correction. Each
+// stage sees the frames in order: the results of a serial loop. Each stage runs up to kStageDepth
+// frames ahead of the next: a stage's cost varies from frame to frame (the registration's rounds,
+// the scan's points), and with one frame of slack the stages kept waiting for each other
+// (docs/results.md, "Threads": the two-thread speed-up against the depth). A frame that fails
+// throws, after `take` has had the frames before it.
+template <class Take>
+void drive(BimOdometry& odometry, const io::FrameDumpReader& dump, const OdometryInterpolator& odom,
+           const FrameSource& frame_at, std::optional<PointCloud> first_frame, std::size_t n, int threads,
+           Take&& take) {
   constexpr std::size_t kStageDepth = 3;
   struct Matched {
     PointCloud frame;
     BimFrameInput input;
   };
-  Prefetch<Matched> matched(settings.odometry.threads, n, [&](std::size_t i) {
+  Prefetch<Matched> matched(threads, n, [&](std::size_t i) {
     Matched m;
     m.frame = (i == 0 && first_frame) ? std::move(*first_frame) : frame_at(i);
     m.input = odometry.prepare_scan(m.frame, dump.stamp(i), i);
     odometry.front_end(m.input, odom.at(dump.stamp(i)));
     return m;
   }, kStageDepth);
-  Prefetch<BimFrameInput> frames(settings.odometry.threads, n, [&](std::size_t i) {
+  Prefetch<BimFrameInput> frames(threads, n, [&](std::size_t i) {
     Matched m = matched.get(i);
     odometry.add_key_points(m.input, m.frame);
     return std::move(m.input);
   }, kStageDepth);
-  for (std::size_t i = 0; i < n; ++i) {
-    const double stamp = dump.stamp(i);
-    const Pose2 o = odom.at(stamp);
-    BimFrameResult r;
-    try {
-      r = odometry.process(frames.get(i), o);
-    } catch (const std::exception& e) {
-      // What was computed so far is kept: the caller writes it marked partial.
-      if (report.frames.empty()) throw;
-      report.partial = true;
-      report.error = std::string("frame ") + std::to_string(i) + ": " + e.what();
-      break;
-    }
-    report.wheel.push_back(stamp, report.T_world_base0 * odom0.ominus().oplus(o).to_isometry());
-    report.lidar.push_back(stamp, r.T_world_base_uncorrected);
-    report.bim.push_back(stamp, r.T_world_base);
-    report.anchors_attempted += r.anchor_attempted ? 1 : 0;
-    report.anchors_accepted += r.anchor.decision == AnchorDecision::kAccepted ? 1 : 0;
-    report.anchors_rejected += r.anchor.decision == AnchorDecision::kRejected ? 1 : 0;
-    report.fallbacks += r.mode == ScanMatchMode::kFallback ? 1 : 0;
-    report.frames.push_back(std::move(r));
-    if (settings.progress) settings.progress(i + 1, n);
+  for (std::size_t i = 0; i < n; ++i) take(i, odometry.process(frames.get(i), odom.at(dump.stamp(i))));
+}
+
+// BimOdometry over frames [0, n): the three trajectories, the counts and the timing of the report,
+// the deviation report when the as-built is estimated, and with refine_as_built the second pass.
+void track_frames(const io::FrameDumpReader& dump, const bim::BimMesh& mesh, const OdometryInterpolator& odom,
+                  const FrameSource& frame_at, const std::shared_ptr<const PointCloud>& bim_cloud,
+                  std::optional<PointCloud> first_frame, const RunSettings& settings, RunReport& report) {
+  const std::size_t n = report.frames_requested;
+  BimOdometrySettings os = settings.odometry;
+  os.T_base_lidar = dump.meta().T_base_lidar;
+  // With threads, two of them prepare and match the next frames (drive()) all the time; the
+  // odometry's own parallel work (the registration's search) gets the others, if any.
+  if (settings.odometry.threads != 1) os.threads = std::max(1, resolve_thread_count(settings.odometry.threads) - 2);
+  BimOdometry odometry(bim_cloud, report.T_world_base0, os);
+  const bool refine = settings.refine_as_built && odometry.as_built() != nullptr;
+  const std::size_t progress_total = refine ? 2 * n : n;  // the second pass reads every frame again
+  const Pose2 odom0 = odom.at(dump.stamp(0));
+  const auto t_frames = std::chrono::steady_clock::now();
+  try {
+    drive(odometry, dump, odom, frame_at, std::move(first_frame), n, settings.odometry.threads,
+          [&](std::size_t i, BimFrameResult r) {
+            const double stamp = dump.stamp(i);
+            report.wheel.push_back(stamp, report.T_world_base0 * odom0.ominus().oplus(odom.at(stamp)).to_isometry());
+            report.lidar.push_back(stamp, r.T_world_base_uncorrected);
+            report.bim.push_back(stamp, r.T_world_base);
+            report.anchors_attempted += r.anchor_attempted ? 1 : 0;
+            report.anchors_accepted += r.anchor.decision == AnchorDecision::kAccepted ? 1 : 0;
+            report.anchors_rejected += r.anchor.decision == AnchorDecision::kRejected ? 1 : 0;
+            report.fallbacks += r.mode == ScanMatchMode::kFallback ? 1 : 0;
+            report.frames.push_back(std::move(r));
+            if (settings.progress) settings.progress(i + 1, progress_total);
+          });
+  } catch (const std::exception& e) {
+    // What was computed so far is kept: the caller writes it marked partial.
+    if (report.frames.empty()) throw;
+    report.partial = true;
+    report.error = std::string("frame ") + std::to_string(report.frames.size()) + ": " + e.what();
   }
   report.seconds_frames = seconds_since(t_frames);
   if (odometry.as_built() != nullptr) {
@@ -235,6 +242,26 @@ void track_frames(const io::FrameDumpReader& dump, const bim::BimMesh& mesh, con
     report.mean_seconds_icp += f.seconds_icp / static_cast<double>(m);
     report.mean_seconds_process += f.seconds_total / static_cast<double>(m);
   }
+  if (!refine || report.partial) return;
+  // The second pass: the same frames from the same start, registered to the building as estimated
+  // at the end of the first, so that the first frames' poses know what the whole run learnt.
+  const auto t_refine = std::chrono::steady_clock::now();
+  BimOdometrySettings rs = os;
+  rs.estimate_as_built = false;
+  try {
+    BimOdometry second(bim_cloud, report.T_world_base0, rs);
+    second.register_to(*odometry.as_built());
+    drive(second, dump, odom, frame_at, std::nullopt, m, settings.odometry.threads,
+          [&](std::size_t i, const BimFrameResult& r) {
+            report.bim_refined.push_back(r.stamp, r.T_world_base);
+            if (settings.progress) settings.progress(n + i + 1, progress_total);
+          });
+  } catch (const std::exception& e) {
+    report.bim_refined = Trajectory{};
+    report.warnings.push_back(std::string("the second pass over the building as estimated failed, no refined "
+                                          "trajectory: ") + e.what());
+  }
+  report.seconds_refine = seconds_since(t_refine);
 }
 
 // Liu et al. 2022, Table 2, the APE and the registrations' own error, all horizontal and without
@@ -257,6 +284,8 @@ void measure_against_truth(RunReport& report, const Trajectory& truth) {
   const std::vector<eval::DriftSample> wheel = eval::drift_at(report.wheel, gt, rows, drift);
   const std::vector<eval::DriftSample> lidar = eval::drift_at(report.lidar, gt, rows, drift);
   const std::vector<eval::DriftSample> bim = eval::drift_at(report.bim, gt, rows, drift);
+  const std::vector<eval::DriftSample> refined =
+      report.bim_refined.empty() ? std::vector<eval::DriftSample>{} : eval::drift_at(report.bim_refined, gt, rows, drift);
   for (std::size_t k = 0; k < rows.size(); ++k) {
     ObservationRow row;
     row.name = k + 1 < rows.size() ? "P" + std::to_string(k + 1) : "end";
@@ -265,6 +294,7 @@ void measure_against_truth(RunReport& report, const Trajectory& truth) {
     row.error_wheel = wheel[k].error;
     row.error_lidar = lidar[k].error;
     row.error_bim = bim[k].error;
+    if (!refined.empty()) row.error_refined = refined[k].error;
     report.table.push_back(row);
   }
 
@@ -283,6 +313,11 @@ void measure_against_truth(RunReport& report, const Trajectory& truth) {
   report.max_error_wheel = e_wheel.max;
   report.max_error_lidar = e_lidar.max;
   report.max_error_bim = e_bim.max;
+  if (!report.bim_refined.empty()) {
+    const eval::ErrorStats e_refined = error_stats(report.bim_refined, gt);
+    report.ape_rmse_refined = e_refined.rmse;
+    report.max_error_refined = e_refined.max;
+  }
 
   Trajectory registered, registered_gt;
   for (std::size_t i = 0; i < m; ++i) {
@@ -333,7 +368,7 @@ RunReport run_bim_odometry(const io::FrameDumpReader& dump, const bim::BimMesh& 
   }
   if (report.localization_status != Status::kOk) return report;
 
-  track_frames(dump, mesh, odom, frame_at, std::move(bim_cloud), std::move(first_frame), settings, report);
+  track_frames(dump, mesh, odom, frame_at, bim_cloud, std::move(first_frame), settings, report);
   if (report.has_ground_truth) measure_against_truth(report, gt.poses);
   return report;
 }

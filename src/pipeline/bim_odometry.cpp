@@ -359,6 +359,28 @@ void BimOdometry::correct(const PointCloud& keys, BimFrameResult& out) {
   if (as_built_ != nullptr && out.anchor.decision == AnchorDecision::kAccepted) update_as_built(icp, c, out);
 }
 
+void BimOdometry::register_to(const AsBuiltMap& map) {
+  PLUMB_CHECK(settings_.use_bim, "BimOdometry::register_to: the odometry does not use the BIM (use_bim = false)");
+  PLUMB_CHECK(!settings_.estimate_as_built,
+              "BimOdometry::register_to: the odometry estimates the as-built itself (estimate_as_built), which "
+              "would replace the target");
+  PointCloud target = map.corrected_cloud();
+  PLUMB_CHECK(target.size() == bim_->size() && target.labels == bim_->labels,
+              "BimOdometry::register_to: the as-built map was made from another BIM cloud ("
+                  << target.size() << " points, the odometry's " << bim_->size() << ", or other element labels)");
+  bim_ = std::make_shared<const PointCloud>(std::move(target));
+  bim_tree_ = std::make_unique<KdTree3f>(bim_->points);
+  take_element_covariances(map);
+}
+
+void BimOdometry::take_element_covariances(const AsBuiltMap& map) {
+  for (std::size_t e = 0; e < element_covariance_.size() && e < map.num_elements(); ++e) {
+    if (!map.has_points(e)) continue;
+    const ElementEstimate est = map.element(e);
+    if (est.frames > 0) element_covariance_[e] = est.covariance;
+  }
+}
+
 void BimOdometry::update_as_built(const IcpResult& icp, const Vector3d& robot_position, BimFrameResult& out) {
   out.as_built_pairs = as_built_->observe(icp.correspondences, robot_position);
   if (++anchors_since_refresh_ < settings_.as_built_refresh_every) return;
@@ -366,11 +388,7 @@ void BimOdometry::update_as_built(const IcpResult& icp, const Vector3d& robot_po
   bim_ = std::make_shared<const PointCloud>(as_built_->corrected_cloud());
   bim_tree_ = std::make_unique<KdTree3f>(bim_->points);
   // The target's elements now err by the estimate's uncertainty, not by the construction tolerance.
-  for (std::size_t e = 0; e < element_covariance_.size() && e < as_built_->num_elements(); ++e) {
-    if (!as_built_->has_points(e)) continue;
-    const ElementEstimate est = as_built_->element(e);
-    if (est.frames > 0) element_covariance_[e] = est.covariance;
-  }
+  take_element_covariances(*as_built_);
 }
 
 }  // namespace plumb

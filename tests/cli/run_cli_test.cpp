@@ -120,7 +120,7 @@ TEST_F(CliTest, RunOnTheExactModelRegistersWithinACentimetre) {
 
 TEST_F(CliTest, RunThreadCountDoesNotChangeAnyOutput) {
   // The same run on 1 and 3 threads (chunks spread unevenly over the threads; the frame read
-  // ahead on a second thread): trajectories and the as-built deviations byte for byte.
+  // ahead on a second thread): trajectories, the as-built deviations and the second pass byte for byte.
   const std::string dir = test::temp_path("cli_run_threads_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   ASSERT_EQ(run_cli("simulate '" + demo_model() + "' -o '" + dir + "' --lidar vlp16 --length 3 --seed 6").exit_code, 0);
@@ -128,16 +128,52 @@ TEST_F(CliTest, RunThreadCountDoesNotChangeAnyOutput) {
   for (const char* threads : {"1", "3"}) {
     const std::string out = dir + "_out" + threads;
     const test::RunResult r = run_cli("run '" + dir + "' --bim '" + demo_model() + "' -o '" + out +
-                                      "' --gt-start --as-built --threads " + threads);
+                                      "' --gt-start --as-built --refine --threads " + threads);
     ASSERT_EQ(r.exit_code, 0) << r.err;
     outputs.push_back(test::read_text(out + "/bim.tum") + test::read_text(out + "/lidar.tum") +
-                      test::read_text(out + "/deviations.csv"));
+                      test::read_text(out + "/deviations.csv") + test::read_text(out + "/bim_refined.tum"));
     std::filesystem::remove_all(out);
   }
   EXPECT_GT(outputs[0].size(), 1000u);
   EXPECT_EQ(outputs[1], outputs[0]);
   EXPECT_NE(run_cli("run '" + dir + "' --bim '" + demo_model() + "' -o '" + dir + "_bad' --threads -2").exit_code, 0);
   std::filesystem::remove_all(dir);
+}
+
+// `run --as-built --refine`: a second pass over the building as estimated, written beside the
+// online trajectory and reported beside it; --refine alone is a usage error.
+TEST_F(CliTest, RunRefineWritesTheSecondPassBesideTheOnlineTrajectory) {
+  const std::string dump_dir = simulate_demo_dump("cli_run_refine", 5.0);
+  const std::string out = dump_dir + "_out";
+  test::RunResult r = run_cli("run '" + dump_dir + "' --bim '" + demo_model() + "' -o '" + out + "' --gt-start --refine");
+  EXPECT_GE(r.exit_code, 100);
+  EXPECT_NE(r.err.find("--as-built"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out + "/bim.tum"));
+  r = run_cli("run '" + dump_dir + "' --bim '" + demo_model() + "' -o '" + out + "' --gt-start --as-built --refine --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Json j = Json::parse(r.out);
+  const io::FrameDumpReader dump(dump_dir);
+  EXPECT_EQ(count_lines(out + "/bim_refined.tum"), dump.num_frames());
+  const Trajectory refined = io::read_tum(out + "/bim_refined.tum");
+  const Trajectory gt = dump.ground_truth();
+  ASSERT_EQ(refined.size(), gt.size());
+  const Json& end = j.at("table").at(2);
+  EXPECT_NEAR((refined.poses.back().translation() - gt.poses.back().translation()).head<2>().norm(),
+              end.at("bim_refined").at("error").get<double>(), 1e-4);
+  EXPECT_GT(j.at("max_error_xy").at("bim_refined").get<double>(), 0.0);
+  EXPECT_LT(j.at("max_error_xy").at("bim_refined").get<double>(), 0.08);
+  EXPECT_LE(j.at("ape_rmse_xy").at("bim_refined").get<double>(), j.at("max_error_xy").at("bim_refined").get<double>());
+  EXPECT_GT(j.at("seconds_refine").get<double>(), 0.0);
+  EXPECT_NE(test::read_text(out + "/trajectory.svg").find("second pass"), std::string::npos);
+  // Without --refine, no second pass and no trace of one.
+  r = run_cli("run '" + dump_dir + "' --bim '" + demo_model() + "' -o '" + out + "_online' --gt-start --as-built --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out + "_online/bim_refined.tum"));
+  EXPECT_FALSE(Json::parse(r.out).at("max_error_xy").contains("bim_refined"));
+  EXPECT_EQ(test::read_text(out + "_online/bim.tum"), test::read_text(out + "/bim.tum"));
+  std::filesystem::remove_all(dump_dir);
+  std::filesystem::remove_all(out);
+  std::filesystem::remove_all(out + "_online");
 }
 
 TEST_F(CliTest, RunWithoutWheelOdometryOrWithBadOptionsFailsClearly) {

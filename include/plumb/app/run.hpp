@@ -47,6 +47,11 @@ struct RunSettings {
   std::size_t max_frames = 0;       ///< 0 = all
   /// Construction tolerance the as-built deviations are judged against (odometry.estimate_as_built) [m].
   double deviation_tolerance = 0.02;
+  /// With odometry.estimate_as_built: after the run, a second pass registers every frame again, from
+  /// the same start, to the building as estimated at the end of the run (BimOdometry::register_to),
+  /// so that the first frames' poses know what the whole run learnt: RunReport::bim_refined. An
+  /// offline result (the frames are read and processed twice); not done for a partial run.
+  bool refine_as_built = false;
   std::function<void(std::size_t done, std::size_t total)> progress;  ///< called after each frame
 };
 
@@ -56,6 +61,7 @@ struct ObservationRow {
   std::size_t frame = 0;
   double distance = 0.0;      ///< distance travelled (ground truth) [m]
   double error_wheel = 0.0, error_lidar = 0.0, error_bim = 0.0;  ///< horizontal position error [m]
+  double error_refined = 0.0;  ///< of RunReport::bim_refined, when there is one [m]
 };
 
 /// @brief Everything a run produced.
@@ -63,6 +69,9 @@ struct RunReport {
   Trajectory wheel;  ///< nominal wheel odometry anchored at the initial pose, BIM frame, frame stamps
   Trajectory lidar;  ///< front end without BIM corrections
   Trajectory bim;    ///< corrected
+  /// With RunSettings::refine_as_built: the second pass's trajectory, registered to the building as
+  /// estimated at the end of the run (empty otherwise, or when that pass failed: see `warnings`).
+  Trajectory bim_refined;
   std::vector<BimFrameResult> frames;
   std::size_t frames_requested = 0;     ///< frames the run was to process (max_frames or the whole dump)
   /// A frame failed (e.g. an unreadable frame file) after others were processed: the report covers
@@ -89,6 +98,7 @@ struct RunReport {
   std::size_t anchors_accepted = 0, anchors_rejected = 0, anchors_attempted = 0;
   std::size_t fallbacks = 0;            ///< front-end frames that fell back to the wheel prior
   double seconds_localize = 0.0, seconds_frames = 0.0;
+  double seconds_refine = 0.0;          ///< the second pass (RunSettings::refine_as_built) [s]
   double frames_per_second = 0.0;       ///< frames / seconds_frames (reading and deskewing included)
   /// Mean per-frame time of BimOdometry::process() and its parts [s] (reading frames excluded).
   double mean_seconds_front_end = 0.0, mean_seconds_segment = 0.0, mean_seconds_icp = 0.0, mean_seconds_process = 0.0;
@@ -102,6 +112,7 @@ struct RunReport {
   /// alignment: the RMS and the largest error [m].
   double ape_rmse_wheel = 0.0, ape_rmse_lidar = 0.0, ape_rmse_bim = 0.0;
   double max_error_wheel = 0.0, max_error_lidar = 0.0, max_error_bim = 0.0;  ///< see ape_rmse_wheel [m]
+  double ape_rmse_refined = 0.0, max_error_refined = 0.0;  ///< of bim_refined, when there is one [m]
   /// Horizontal error of the BIM registrations alone (BimFrameResult::T_world_base_registered) against
   /// the truth, over the frames that registered: how well the model itself places the robot. With
   /// as-built deviations (the simulator's walls are shifted and turned) this bounds the corrected pose.

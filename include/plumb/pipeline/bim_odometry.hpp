@@ -248,6 +248,14 @@ class BimOdometry {
   const BimOdometrySettings& settings() const { return settings_; }
   /// @brief The as-built estimate (null unless settings.estimate_as_built).
   const AsBuiltMap* as_built() const { return as_built_.get(); }
+  /// @brief Register the frames from now on to the building as `map` estimates it, e.g. the estimate
+  ///        at the end of an earlier pass over the same frames: the target becomes the map's corrected
+  ///        cloud, and each element the map has observed weighs the anchors by the estimate's
+  ///        covariance instead of the construction tolerance. The map is read once, not kept.
+  /// @throws plumb::Error with estimate_as_built (the odometry's own estimate would replace the
+  ///         target), without use_bim, or when `map` was not made from this odometry's BIM cloud
+  ///         (other points or labels)
+  void register_to(const AsBuiltMap& map);
 
  private:
   /// The frame's ground and vertical-plane key points, thinned (a function of the frame alone).
@@ -265,6 +273,8 @@ class BimOdometry {
   /// The accepted anchor's pairs into the as-built estimate; every as_built_refresh_every anchors,
   /// the registration target becomes the cloud as estimated.
   void update_as_built(const IcpResult& icp, const Vector3d& robot_position, BimFrameResult& out);
+  /// Each element `map` has observed weighs the anchors by the estimate's covariance from now on.
+  void take_element_covariances(const AsBuiltMap& map);
 
   BimOdometrySettings settings_;
   std::shared_ptr<const PointCloud> bim_;  ///< the registration target: the design, or as estimated
