@@ -109,3 +109,8 @@ for name in ("demo_office", "AC20-FZK-Haus", "duplex", "large_office"):
           f" {100 * end['bim']['error'] / end['distance']:.3f} / {100 * end['bim_refined']['error'] / end['distance']:.3f} % |"
           f" {yes('bim')} / {yes('bim_refined')} | {observed} of {len(rows['elements'])} | {med} | {flagged} / {right} |")
 PY
+
+# How much of the offsets' error is the datum (where the building as a whole stands in the design
+# frame, which no measurement from inside can see): bench/as_built_datum.py.
+echo
+python3 bench/as_built_datum.py "$out"
