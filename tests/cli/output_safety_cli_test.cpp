@@ -272,6 +272,15 @@ TEST_F(CliTest, AMidRunFailureWritesThePartialResults) {
   EXPECT_NE(j.at("error").get<std::string>().find("000003.pcd"), std::string::npos);
   EXPECT_EQ(count_data_lines(out + "/bim.tum"), 3u);
   EXPECT_TRUE(fs::exists(out + "/trajectory.svg"));
+  // With the as-built estimate and --refine: the same partial run, its deviation report, and no
+  // second pass over a run that stopped.
+  r = run_cli(run_args(dump, out + "_refine", "--max-frames 6 --as-built --refine"));
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("000003.pcd"), std::string::npos) << r.err;
+  EXPECT_EQ(count_data_lines(out + "_refine/bim.tum"), 3u);
+  EXPECT_TRUE(fs::exists(out + "_refine/deviations.json"));
+  EXPECT_FALSE(fs::exists(out + "_refine/bim_refined.tum"));
+  fs::remove_all(out + "_refine");
 
   r = run_cli("lio " + q(dump) + " --mode loam --max-frames 6 -o " + q(out + "_lio"));
   EXPECT_EQ(r.exit_code, 1);

@@ -52,7 +52,9 @@ struct RunSettings {
   /// so that the first frames' poses know what the whole run learnt: RunReport::bim_refined. An
   /// offline result (the frames are read and processed twice); not done for a partial run.
   bool refine_as_built = false;
-  std::function<void(std::size_t done, std::size_t total)> progress;  ///< called after each frame
+  /// Called after each frame; with refine_as_built `total` is twice the frames, the second pass
+  /// counting on from the first.
+  std::function<void(std::size_t done, std::size_t total)> progress;
 };
 
 /// @brief One row of Liu et al. 2022, Table 2.
