@@ -119,7 +119,7 @@ void register_run_command(CLI::App& app) {
   cmd->add_option("--bim", o->model, "The building model (IFC)")->required();
   cmd->add_option("-o,--output", o->out_dir, "Output directory")->required();
   cmd->add_flag("--json", o->json, "Print the report as JSON");
-  cmd->add_flag("--no-bim", o->no_bim, "Plain scan-matching odometry (no BIM corrections)");
+  CLI::Option* no_bim = cmd->add_flag("--no-bim", o->no_bim, "Plain scan-matching odometry (no BIM corrections)");
   CLI::Option* as_built = cmd->add_flag(
       "--as-built", o->as_built,
       "Estimate each element's deviation from the design while driving and register to the "
@@ -128,6 +128,7 @@ void register_run_command(CLI::App& app) {
                 "With --as-built: after the run, register every frame again, from the same start, to the building "
                 "as estimated at its end; writes bim_refined.tum (offline: the frames are processed twice)")
       ->needs(as_built);
+  as_built->excludes(no_bim);  // the as-built is estimated from the BIM registrations
   cmd->add_option("--tolerance", o->tolerance,
                   "Construction tolerance the --as-built deviations are judged against [m] (default 0.02)")
       ->check(CLI::PositiveNumber);

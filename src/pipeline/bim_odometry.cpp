@@ -122,6 +122,8 @@ BimOdometry::BimOdometry(std::shared_ptr<const PointCloud> bim_cloud, const Eige
   PLUMB_CHECK(settings.wheel_tolerance_xy >= 0.0 && settings.wheel_tolerance_theta >= 0.0 &&
                   settings.wheel_tolerance_ratio >= 0.0,
               "BimOdometry: wheel_tolerance_xy, wheel_tolerance_theta and wheel_tolerance_ratio must be >= 0");
+  PLUMB_CHECK(settings.use_bim || !settings.estimate_as_built,
+              "BimOdometry: estimate_as_built needs use_bim (the as-built is estimated from the BIM registrations)");
   if (settings.use_bim) {
     PLUMB_CHECK(bim_ != nullptr, "BimOdometry: no BIM cloud (set use_bim = false for plain odometry)");
     PLUMB_CHECK(bim_->size() >= 100, "BimOdometry: the BIM cloud has " << bim_->size() << " points (need >= 100)");

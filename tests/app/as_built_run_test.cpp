@@ -43,13 +43,11 @@ class AsBuiltRunTest : public ::testing::Test {
     s.seed = 3;
     plumb::simulate_to_dump(*mesh_, dir_, s);
     design_ = new plumb::RunReport(run(false));
-    as_built_ = new plumb::RunReport(run(true));
-    refined_ = new plumb::RunReport(run(true, true));
+    as_built_ = new plumb::RunReport(run(true, true));
   }
   static void TearDownTestSuite() {
     delete design_;
     delete as_built_;
-    delete refined_;
     std::filesystem::remove_all(dir_);
     delete mesh_;
     mesh_ = nullptr;
@@ -65,14 +63,14 @@ class AsBuiltRunTest : public ::testing::Test {
   static plumb::bim::BimMesh* mesh_;
   static std::string dir_;
   static plumb::RunReport* design_;    ///< registered to the design
-  static plumb::RunReport* as_built_;  ///< with the as-built estimate
-  static plumb::RunReport* refined_;   ///< the same, and a second pass (refine_as_built)
+  /// With the as-built estimate and its second pass (refine_as_built; the first pass is the
+  /// online run, unchanged by it: CliTest.RunRefineWritesTheSecondPassBesideTheOnlineTrajectory).
+  static plumb::RunReport* as_built_;
 };
 plumb::bim::BimMesh* AsBuiltRunTest::mesh_ = nullptr;
 std::string AsBuiltRunTest::dir_;
 plumb::RunReport* AsBuiltRunTest::design_ = nullptr;
 plumb::RunReport* AsBuiltRunTest::as_built_ = nullptr;
-plumb::RunReport* AsBuiltRunTest::refined_ = nullptr;
 
 TEST_F(AsBuiltRunTest, RegisteringToTheBuildingAsEstimatedBeatsTheDesign) {
   const plumb::RunReport& design = *design_;
@@ -119,24 +117,16 @@ TEST_F(AsBuiltRunTest, ReportedOffsetsMatchTheTrueDisplacements) {
 }
 
 TEST_F(AsBuiltRunTest, ASecondPassOverTheBuildingAsEstimatedImprovesOnTheFirst) {
-  const plumb::RunReport& online = *as_built_;
-  const plumb::RunReport& r = *refined_;
+  const plumb::RunReport& r = *as_built_;
   ASSERT_FALSE(r.partial);
-  EXPECT_TRUE(online.bim_refined.empty());
-  // The first pass is the online run, unchanged.
-  ASSERT_EQ(r.bim.size(), online.bim.size());
-  for (std::size_t i = 0; i < r.bim.size(); ++i) {
-    ASSERT_TRUE(r.bim.poses[i].isApprox(online.bim.poses[i], 0.0)) << "frame " << i;
-  }
-  ASSERT_EQ(r.deviations.size(), online.deviations.size());
-  for (std::size_t k = 0; k < r.deviations.size(); ++k) EXPECT_EQ(r.deviations[k].offset_m, online.deviations[k].offset_m);
+  EXPECT_TRUE(design_->bim_refined.empty());  // nothing estimated, no second pass
   // The second pass: every frame, at the first pass's stamps, closer to the truth.
   ASSERT_EQ(r.bim_refined.size(), r.bim.size());
   EXPECT_EQ(r.bim_refined.stamps, r.bim.stamps);
   EXPECT_LT(r.ape_rmse_refined, r.ape_rmse_bim);
   EXPECT_LT(r.ape_rmse_refined, design_->ape_rmse_bim);
   EXPECT_GT(r.ape_rmse_refined, 0.0);
-  // Its largest error is no worse, up to noise (on other seeds of this run it was 1-40 % smaller).
+  // Its largest error is no worse, up to noise (on three other seeds of this run it was 1-43 % smaller).
   EXPECT_LT(r.max_error_refined, 1.05 * r.max_error_bim);
   ASSERT_FALSE(r.table.empty());
   for (const plumb::ObservationRow& row : r.table) EXPECT_GT(row.error_refined, 0.0) << row.name;

@@ -170,7 +170,9 @@ TEST_F(CliTest, RunRefineWritesTheSecondPassBesideTheOnlineTrajectory) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_FALSE(std::filesystem::exists(out + "_online/bim_refined.tum"));
   EXPECT_FALSE(Json::parse(r.out).at("max_error_xy").contains("bim_refined"));
+  // The first pass is the online run, unchanged by the second: trajectory and deviation report.
   EXPECT_EQ(test::read_text(out + "_online/bim.tum"), test::read_text(out + "/bim.tum"));
+  EXPECT_EQ(test::read_text(out + "_online/deviations.csv"), test::read_text(out + "/deviations.csv"));
   std::filesystem::remove_all(dump_dir);
   std::filesystem::remove_all(out);
   std::filesystem::remove_all(out + "_online");
@@ -185,6 +187,11 @@ TEST_F(CliTest, RunWithoutWheelOdometryOrWithBadOptionsFailsClearly) {
   EXPECT_NE(r.err.find("start-hint"), std::string::npos) << r.err;
   r = run_cli("run '" + dump_dir + "' --bim '" + demo_model() + "' -o '" + out + "' --start-hint 1 2 --start-hint-radius -1");
   EXPECT_NE(r.exit_code, 0);
+  // The as-built is estimated from the BIM registrations: with --no-bim there would be no report.
+  r = run_cli("run '" + dump_dir + "' --bim '" + demo_model() + "' -o '" + out + "' --gt-start --no-bim --as-built");
+  EXPECT_GE(r.exit_code, 100);
+  EXPECT_NE(r.err.find("--no-bim"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out + "/bim.tum"));
   // No odom.csv: the front end has no prior; the message names the file.
   std::filesystem::remove(dump_dir + "/odom.csv");
   r = run_cli("run '" + dump_dir + "' --bim '" + demo_model() + "' -o '" + out + "'");

@@ -273,6 +273,11 @@ TEST(BimOdometryTest, BadInputThrows) {
   }
   plumb::BimOdometrySettings plain;
   plain.use_bim = false;
+  // The as-built is estimated from the BIM registrations: asking for it without them is misuse, not
+  // a run that silently reports nothing.
+  plumb::BimOdometrySettings no_registrations = plain;
+  no_registrations.estimate_as_built = true;
+  EXPECT_THROW(plumb::BimOdometry(nullptr, Eigen::Isometry3d::Identity(), no_registrations), plumb::Error);
   plumb::BimOdometry odometry(nullptr, Eigen::Isometry3d::Identity(), plain);
   // An empty frame: no scan, the front end falls back to the wheel prior; never a crash.
   const auto r0 = odometry.process(plumb::PointCloud{}, 0.0, plumb::Pose2{});
