@@ -75,6 +75,8 @@ PY
 
 python3 - "$out" <<'PY'
 import json, statistics, sys
+sys.path.insert(0, "bench")  # the script runs from the repository root
+from as_built_datum import observed_faces
 out = sys.argv[1]
 print()
 print("| building | max error BIM: design / as built / second pass | APE BIM: design / as built / second pass | registration rms: design / as built | end error BIM, as built / second pass | as built better than LiDAR at every Table 2 point: online / second pass | elements observed | offset error, median (sigma <= 5 mm) | deviates: flagged / right |")
@@ -83,23 +85,13 @@ for name in ("demo_office", "AC20-FZK-Haus", "duplex", "large_office"):
     try:
         d = json.load(open(f"{out}/{name}/report.json"))
         a = json.load(open(f"{out}/{name}/report_as_built.json"))
-        rows = json.load(open(f"{out}/{name}/run_as_built/deviations.json"))
-        truth = {e["global_id"]: e["T_design_asbuilt"] for e in json.load(open(f"{out}/{name}/dump/as_built.json"))["elements"]}
+        rows, faces = observed_faces(f"{out}/{name}/run_as_built", f"{out}/{name}/dump")
     except (OSError, ValueError, KeyError):
         print(f"| {name} | run failed | | | | | | | |"); continue
-    errors, observed, flagged, right = [], 0, 0, 0
-    for row in rows["elements"]:
-        if row["status"] == "unobserved":
-            continue
-        observed += 1
-        T, p, n = truth[row["global_id"]], row["point"], row["normal"]
-        moved = [sum(T[4 * i + j] * p[j] for j in range(3)) + T[4 * i + 3] - p[i] for i in range(3)]
-        true = sum(n[i] * moved[i] for i in range(3))
-        if row["sigma_m"] <= 0.005:
-            errors.append(abs(row["offset_m"] - true))
-        if row["status"] == "deviates":
-            flagged += 1
-            right += abs(true) > rows["tolerance_m"]
+    errors = [abs(f["error"]) for f in faces if f["sigma"] <= 0.005]
+    observed = len(faces)
+    flagged = sum(f["status"] == "deviates" for f in faces)
+    right = sum(f["status"] == "deviates" and abs(f["true"]) > rows["tolerance_m"] for f in faces)
     end = a["table"][-1]
     med = f"{1000 * statistics.median(errors):.1f} mm ({len(errors)})" if errors else "–"
     yes = lambda key: 'yes' if all(row[key]['error'] < row['lidar']['error'] for row in a['table']) else 'no'

@@ -18,26 +18,30 @@ import statistics
 import sys
 
 
-def face_errors(run_dir, dump_dir):
-    """(normal, estimated offset - true offset, sigma, true displacement of the face point) of every
-    observed row."""
-    rows = json.load(open(f"{run_dir}/deviations.json"))["elements"]
+def observed_faces(run_dir, dump_dir):
+    """The deviation report of a run against the dump's truth: (rows, faces), with `rows` the report
+    as read (`tolerance_m`, `elements`) and one face per observed element: normal, error (estimated
+    minus true offset), sigma, status, true (the true offset) and moved (the true displacement of the
+    face point). Also used by bench/accuracy.sh."""
+    rows = json.load(open(f"{run_dir}/deviations.json"))
     truth = {e["global_id"]: e["T_design_asbuilt"] for e in json.load(open(f"{dump_dir}/as_built.json"))["elements"]}
-    out = []
-    for row in rows:
+    faces = []
+    for row in rows["elements"]:
         if row["status"] == "unobserved":
             continue
         T, p, n = truth[row["global_id"]], row["point"], row["normal"]
         moved = [sum(T[4 * i + j] * p[j] for j in range(3)) + T[4 * i + 3] - p[i] for i in range(3)]
         true = sum(n[i] * moved[i] for i in range(3))
-        out.append((n, row["offset_m"] - true, row["sigma_m"], moved))
-    return out
+        faces.append({"normal": n, "error": row["offset_m"] - true, "sigma": row["sigma_m"],
+                      "status": row["status"], "true": true, "moved": moved})
+    return rows, faces
 
 
 def common_shift(errors):
     """The horizontal shift d minimising sum (error - n_xy . d)^2 (2x2 normal equations)."""
     a = b = c = u = v = 0.0
-    for n, e, _, _ in errors:
+    for f in errors:
+        n, e = f["normal"], f["error"]
         a += n[0] * n[0]
         b += n[0] * n[1]
         c += n[1] * n[1]
@@ -58,7 +62,7 @@ def main():
     print("|---|---|---|---|---|")
     for name in ("demo_office", "AC20-FZK-Haus", "duplex", "large_office"):
         try:
-            errors = face_errors(f"{out}/{name}/run_as_built", f"{out}/{name}/dump")
+            errors = observed_faces(f"{out}/{name}/run_as_built", f"{out}/{name}/dump")[1]
         except (OSError, ValueError, KeyError):
             print(f"| {name} | run failed | | | |")
             continue
@@ -66,10 +70,11 @@ def main():
             print(f"| {name} | no element observed | | | |")
             continue
         dx, dy = common_shift(errors)
-        raw = [abs(e) for _, e, s, _ in errors if s <= 0.005]
-        left = [abs(e - n[0] * dx - n[1] * dy) for n, e, s, _ in errors if s <= 0.005]
-        mx = -sum(m[0] for *_, m in errors) / len(errors)
-        my = -sum(m[1] for *_, m in errors) / len(errors)
+        tight = [f for f in errors if f["sigma"] <= 0.005]
+        raw = [abs(f["error"]) for f in tight]
+        left = [abs(f["error"] - f["normal"][0] * dx - f["normal"][1] * dy) for f in tight]
+        mx = -sum(f["moved"][0] for f in errors) / len(errors)
+        my = -sum(f["moved"][1] for f in errors) / len(errors)
         if not raw:
             print(f"| {name} | no offset with sigma <= 5 mm | | | |")
             continue
