@@ -27,6 +27,7 @@
 #include "plumb/core/types.hpp"
 
 #include "plumb/search/brute_force.hpp"
+#include "plumb/search/cell_index.hpp"
 #include "plumb/search/kdtree.hpp"
 #include "plumb/search/neighbors.hpp"
 

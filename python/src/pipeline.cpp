@@ -106,7 +106,8 @@ void bind_bim_odometry_types(py::module_& m) {
       .def_readwrite("initial_covariance", &BimOdometrySettings::initial_covariance)
       .def_readwrite("estimate_as_built", &BimOdometrySettings::estimate_as_built)
       .def_readwrite("as_built", &BimOdometrySettings::as_built)
-      .def_readwrite("as_built_refresh_every", &BimOdometrySettings::as_built_refresh_every);
+      .def_readwrite("as_built_refresh_every", &BimOdometrySettings::as_built_refresh_every)
+      .def_readwrite("target_band_margin", &BimOdometrySettings::target_band_margin);
   def_pose(s, "T_base_lidar", &BimOdometrySettings::T_base_lidar, true);
 
   py::class_<BimFrameResult> r(m, "BimFrameResult", "What BimOdometry.process() did with one frame.");
@@ -117,6 +118,7 @@ void bind_bim_odometry_types(py::module_& m) {
       .def_readonly("icp_status", &BimFrameResult::icp_status)
       .def_readonly("icp_overlap", &BimFrameResult::icp_overlap)
       .def_readonly("icp_inliers", &BimFrameResult::icp_inliers)
+      .def_readonly("target_points", &BimFrameResult::target_points)
       .def_readonly("num_key_points", &BimFrameResult::num_key_points)
       .def_readonly("anchor_dof", &BimFrameResult::anchor_dof)
       .def_readonly("registered", &BimFrameResult::registered)

@@ -58,7 +58,72 @@ void reject_outliers(std::vector<Pair>& pairs, std::size_t num_elements, double 
               pairs.end());
 }
 
+/// Edge of the cells in which junctions are found [m]: a few thousand design points each.
+constexpr double kJunctionCell = 2.0;
+
 }  // namespace
+
+bool AsBuiltMap::junction(std::size_t i) {
+  if (cells_ == nullptr) return false;
+  const PointCloud& design = *design_;
+  const std::size_t c = cells_->cell(design.points[i]);
+  if (!junction_done_[c]) {
+    // The cell's points against every point within the radius of the cell: the same neighbours a
+    // search over the whole cloud finds (the box is widened a little for rounding).
+    junction_done_[c] = true;
+    const double r = settings_.junction_radius;
+    Eigen::AlignedBox3d box = cells_->cell_box(c);
+    box.min().array() -= r + 1e-3;
+    box.max().array() += r + 1e-3;
+    std::vector<std::uint32_t> around;
+    cells_->points_in_box(design.points, box, around);
+    std::vector<Vector3f> points(around.size());
+    for (std::size_t k = 0; k < around.size(); ++k) points[k] = design.points[around[k]];
+    const KdTree3f tree(points);
+    std::vector<std::size_t> near;
+    std::vector<float> near_sq;
+    for (const std::uint32_t* it = cells_->cell_begin(c); it != cells_->cell_end(c); ++it) {
+      tree.radius(design.points[*it], static_cast<float>(r), near, near_sq, false);
+      for (std::size_t k : near) {
+        if (design.labels[around[k]] != design.labels[*it]) {
+          junction_[*it] = true;
+          break;
+        }
+      }
+    }
+  }
+  return junction_[i];
+}
+
+PointCloud displaced_points(const PointCloud& design, const std::vector<std::uint32_t>& indices,
+                            const Eigen::VectorXd& mean, const std::vector<Vector3d>& pivots) {
+  PLUMB_CHECK(design.has_labels() && design.has_normals(), "displaced_points: the cloud needs labels and normals");
+  PointCloud out;
+  out.points.resize(indices.size());
+  out.normals.resize(indices.size());
+  out.labels.resize(indices.size());
+  for (std::size_t k = 0; k < indices.size(); ++k) {
+    const std::uint32_t i = indices[k];
+    PLUMB_CHECK(i < design.size(), "displaced_points: index " << i << " out of range for " << design.size() << " points");
+    out.points[k] = design.points[i];
+    out.normals[k] = design.normals[i];
+    out.labels[k] = design.labels[i];
+    const std::int32_t label = design.labels[i];
+    if (label < 0 || 6 * static_cast<Eigen::Index>(label) + 6 > mean.size() ||
+        static_cast<std::size_t>(label) >= pivots.size()) {
+      continue;
+    }
+    const auto e = static_cast<std::size_t>(label);
+    const Vector6d d = mean.segment<6>(static_cast<Eigen::Index>(6 * e));
+    if (d.isZero(0.0)) continue;
+    const Vector3d q = design.points[i].cast<double>();
+    const Vector3d w = d.tail<3>();
+    out.points[k] = (q + d.head<3>() + w.cross(q - pivots[e])).cast<float>();
+    const Vector3d n = design.normals[i].cast<double>();
+    out.normals[k] = (n + w.cross(n)).normalized().cast<float>();
+  }
+  return out;
+}
 
 double ElementEstimate::displacement_sigma(const Vector3d& q, const Vector3d& direction) const {
   const Vector6d h = motion_row(direction, q, pivot);
@@ -90,7 +155,8 @@ std::vector<Vector3d> element_centroids(const PointCloud& cloud, std::vector<std
   return centroid;
 }
 
-AsBuiltMap::AsBuiltMap(const PointCloud& design, const AsBuiltSettings& settings) : settings_(settings) {
+AsBuiltMap::AsBuiltMap(std::shared_ptr<const PointCloud> design_cloud, const AsBuiltSettings& settings)
+    : settings_(settings), design_(std::move(design_cloud)) {
   const AsBuiltSettings& s = settings;
   PLUMB_CHECK(s.sigma_translation > 0.0 && s.sigma_rotation > 0.0 && std::isfinite(s.sigma_translation) &&
                   std::isfinite(s.sigma_rotation),
@@ -105,10 +171,11 @@ AsBuiltMap::AsBuiltMap(const PointCloud& design, const AsBuiltSettings& settings
               "AsBuiltMap: junction_radius must be >= 0");
   PLUMB_CHECK(s.decorrelation_distance >= 0.0 && std::isfinite(s.decorrelation_distance),
               "AsBuiltMap: decorrelation_distance must be >= 0");
+  PLUMB_CHECK(design_ != nullptr, "AsBuiltMap: no design cloud");
+  const PointCloud& design = *design_;
   design.check_consistent("AsBuiltMap: design");
   PLUMB_CHECK(design.has_normals(), "AsBuiltMap: the design cloud has no normals");
   PLUMB_CHECK(design.has_labels(), "AsBuiltMap: the design cloud has no element labels");
-  design_ = design;
   prior_information_ = diagonal_information(s.sigma_translation, s.sigma_rotation);
   std::int32_t max_label = -1;
   for (std::int32_t l : design.labels) {
@@ -120,19 +187,8 @@ AsBuiltMap::AsBuiltMap(const PointCloud& design, const AsBuiltSettings& settings
   const std::vector<Vector3d> centroid = element_centroids(design, &count);
   junction_.assign(design.size(), false);
   if (s.junction_radius > 0.0 && design.size() > 0) {
-    const KdTree3f tree(design.points);
-    std::vector<std::size_t> near;
-    std::vector<float> near_sq;
-    const auto r = static_cast<float>(s.junction_radius);
-    for (std::size_t i = 0; i < design.size(); ++i) {
-      tree.radius(design.points[i], r, near, near_sq, false);
-      for (std::size_t j : near) {
-        if (design.labels[j] != design.labels[i]) {
-          junction_[i] = true;
-          break;
-        }
-      }
-    }
+    cells_ = std::make_unique<CellIndex>(design.points, std::max(kJunctionCell, 4.0 * s.junction_radius));
+    junction_done_.assign(cells_->num_cells(), false);
   }
   information_.resize(elements_.size());
   gradient_ = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(6 * elements_.size()));
@@ -154,10 +210,10 @@ std::size_t AsBuiltMap::observe(const std::vector<IcpCorrespondence>& pairs, con
   used.reserve(pairs.size());
   std::vector<std::size_t> per_element(elements_.size(), 0);
   for (const IcpCorrespondence& c : pairs) {
-    if (c.target_index >= design_.size() || junction_[c.target_index]) continue;
-    const auto e = static_cast<std::size_t>(design_.labels[c.target_index]);
-    const Vector3d q = design_.points[c.target_index].cast<double>();
-    const Vector3d n = design_.normals[c.target_index].cast<double>().normalized();
+    if (c.target_index >= design_->size() || junction(c.target_index)) continue;
+    const auto e = static_cast<std::size_t>(design_->labels[c.target_index]);
+    const Vector3d q = design_->points[c.target_index].cast<double>();
+    const Vector3d n = design_->normals[c.target_index].cast<double>().normalized();
     if (!c.x.allFinite() || !n.allFinite()) continue;
     const Vector6d h = motion_row(n, q, elements_[e].pivot);
     const double z = n.dot(c.x - q);
@@ -296,18 +352,14 @@ ElementEstimate AsBuiltMap::element(std::size_t e) const {
 }
 
 PointCloud AsBuiltMap::corrected_cloud() const {
-  const Eigen::VectorXd& mu = mean();
-  PointCloud out = design_;
-  for (std::size_t i = 0; i < out.size(); ++i) {
-    const auto e = static_cast<std::size_t>(out.labels[i]);
-    const Vector6d d = mu.segment<6>(static_cast<Eigen::Index>(6 * e));
-    if (d.isZero(0.0)) continue;
-    const Vector3d q = design_.points[i].cast<double>();
-    const Vector3d w = d.tail<3>();
-    out.points[i] = (q + d.head<3>() + w.cross(q - elements_[e].pivot)).cast<float>();
-    const Vector3d n = design_.normals[i].cast<double>();
-    out.normals[i] = (n + w.cross(n)).normalized().cast<float>();
-  }
+  std::vector<std::uint32_t> all(design_->size());
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<std::uint32_t>(i);
+  std::vector<Vector3d> pivots(elements_.size());
+  for (std::size_t e = 0; e < elements_.size(); ++e) pivots[e] = elements_[e].pivot;
+  PointCloud out = displaced_points(*design_, all, mean(), pivots);
+  out.intensities = design_->intensities;
+  out.rings = design_->rings;
+  out.times = design_->times;
   return out;
 }
 

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <future>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -18,6 +19,13 @@
 #include "plumb/filters/voxel_grid.hpp"
 
 namespace plumb {
+namespace {
+
+/// How far a registration may move the key points from their predicted pose and still pair with
+/// exactly the points it would find in the whole cloud [m]; farther, the composer's gate rejects it.
+constexpr double kTargetMotion = 0.5;
+
+}  // namespace
 
 Matrix3d front_end_step_covariance(const BimOdometrySettings& s, const Pose2& front_step, const Pose2& wheel_step,
                                    bool matched, const Matrix3d& match_covariance) {
@@ -128,10 +136,18 @@ BimOdometry::BimOdometry(std::shared_ptr<const PointCloud> bim_cloud, const Eige
     PLUMB_CHECK(bim_ != nullptr, "BimOdometry: no BIM cloud (set use_bim = false for plain odometry)");
     PLUMB_CHECK(bim_->size() >= 100, "BimOdometry: the BIM cloud has " << bim_->size() << " points (need >= 100)");
     PLUMB_CHECK(bim_->has_normals(), "BimOdometry: the BIM cloud has no normals (sample it from the model's faces)");
-    bim_tree_ = std::make_unique<KdTree3f>(bim_->points);
+    PLUMB_CHECK(settings_.target_band_margin >= 0.0,
+                "BimOdometry: target_band_margin must be >= 0, got " << settings_.target_band_margin);
+    bim_z_min_ = std::numeric_limits<double>::infinity();
+    bim_z_max_ = -bim_z_min_;
+    for (const Vector3f& p : bim_->points) {
+      if (!p.allFinite()) continue;
+      bim_z_min_ = std::min(bim_z_min_, static_cast<double>(p.z()));
+      bim_z_max_ = std::max(bim_z_max_, static_cast<double>(p.z()));
+    }
     if (settings_.estimate_as_built) {
       PLUMB_CHECK(settings_.as_built_refresh_every >= 1, "BimOdometry: as_built_refresh_every must be >= 1");
-      as_built_ = std::make_unique<AsBuiltMap>(*bim_, settings_.as_built);
+      as_built_ = std::make_unique<AsBuiltMap>(bim_, settings_.as_built);
     }
     if (settings_.anchor_from_elements && bim_->has_labels()) {
       const AsBuiltSettings& ab = settings_.as_built;
@@ -304,7 +320,12 @@ void BimOdometry::correct(const PointCloud& keys, BimFrameResult& out) {
   IcpSettings icp_settings = settings_.icp;
   icp_settings.keep_correspondences = as_built_ != nullptr || !element_pivot_.empty();
   icp_settings.threads = settings_.threads;
-  const IcpResult icp = align_icp(keys, *bim_, *bim_tree_, T_pred, icp_settings);
+  const Target& target = registration_target(keys, T_pred);
+  out.target_points = target.cloud->size();
+  IcpResult icp = align_icp(keys, *target.cloud, *target.tree, T_pred, icp_settings);
+  if (!target.index.empty()) {
+    for (IcpCorrespondence& pair : icp.correspondences) pair.target_index = target.index[pair.target_index];
+  }
   out.icp_status = icp.status;
   out.icp_overlap = icp.overlap;
   out.icp_inliers = icp.num_inliers;
@@ -366,13 +387,54 @@ void BimOdometry::register_to(const AsBuiltMap& map) {
   PLUMB_CHECK(!settings_.estimate_as_built,
               "BimOdometry::register_to: the odometry estimates the as-built itself (estimate_as_built), which "
               "would replace the target");
-  PointCloud target = map.corrected_cloud();
-  PLUMB_CHECK(target.size() == bim_->size() && target.labels == bim_->labels,
+  const PointCloud& design = map.design();
+  PLUMB_CHECK(&design == bim_.get() || (design.size() == bim_->size() && design.labels == bim_->labels),
               "BimOdometry::register_to: the as-built map was made from another BIM cloud ("
-                  << target.size() << " points, the odometry's " << bim_->size() << ", or other element labels)");
-  bim_ = std::make_shared<const PointCloud>(std::move(target));
-  bim_tree_ = std::make_unique<KdTree3f>(bim_->points);
+                  << design.size() << " points, the odometry's " << bim_->size() << ", or other element labels)");
+  displace_target(map.mean());
   take_element_covariances(map);
+}
+
+const BimOdometry::Target& BimOdometry::registration_target(const PointCloud& keys, const Eigen::Isometry3d& T) {
+  const IcpSettings& icp = settings_.icp;
+  double z_min = std::numeric_limits<double>::infinity(), z_max = -z_min;
+  for (const Vector3f& p : keys.points) {
+    if (!p.allFinite()) continue;
+    const double z = (T * p.cast<double>()).z();
+    z_min = std::min(z_min, z);
+    z_max = std::max(z_max, z);
+  }
+  const double reach = 2.0 * std::max(icp.max_correspondence_distance, icp.overlap_distance) + kTargetMotion;
+  z_min -= reach;
+  z_max += reach;
+  if (target_ != nullptr && (target_->whole || (target_->z_min <= z_min && z_max <= target_->z_max))) return *target_;
+
+  auto target = std::make_unique<Target>();
+  target->z_min = z_min - settings_.target_band_margin;
+  target->z_max = z_max + settings_.target_band_margin;
+  // The design's tree is built once and serves every height; a displaced target is cut to the band.
+  target->whole = target_mean_.size() == 0 || (!(target->z_min > bim_z_min_) && !(target->z_max < bim_z_max_));
+  if (target->whole && target_mean_.size() == 0) {
+    target->cloud = bim_;
+  } else {
+    const auto lo = static_cast<float>(target->z_min), hi = static_cast<float>(target->z_max);
+    target->index.reserve(bim_->size());
+    for (std::size_t i = 0; i < bim_->size(); ++i) {
+      const float z = bim_->points[i].z();
+      if (target->whole || (z >= lo && z <= hi)) target->index.push_back(static_cast<std::uint32_t>(i));
+    }
+    target->cloud = std::make_shared<const PointCloud>(displaced_points(*bim_, target->index, target_mean_, target_pivot_));
+    if (target->whole) target->index.clear();
+  }
+  target->tree = std::make_unique<KdTree3f>(target->cloud->points);
+  target_ = std::move(target);
+  return *target_;
+}
+
+void BimOdometry::displace_target(Eigen::VectorXd mean) {
+  if (target_pivot_.empty()) target_pivot_ = element_centroids(*bim_);
+  target_mean_ = std::move(mean);
+  target_.reset();
 }
 
 void BimOdometry::take_element_covariances(const AsBuiltMap& map) {
@@ -387,8 +449,7 @@ void BimOdometry::update_as_built(const IcpResult& icp, const Vector3d& robot_po
   out.as_built_pairs = as_built_->observe(icp.correspondences, robot_position);
   if (++anchors_since_refresh_ < settings_.as_built_refresh_every) return;
   anchors_since_refresh_ = 0;
-  bim_ = std::make_shared<const PointCloud>(as_built_->corrected_cloud());
-  bim_tree_ = std::make_unique<KdTree3f>(bim_->points);
+  displace_target(as_built_->mean());
   // The target's elements now err by the estimate's uncertainty, not by the construction tolerance.
   take_element_covariances(*as_built_);
 }

@@ -297,6 +297,37 @@ TEST(AsBuiltMapTest, DeviationReportJudgesOffsetsAgainstTheTolerance) {
   EXPECT_THROW(deviation_report(map, mesh, 0.01), Error);
 }
 
+TEST(AsBuiltMapTest, PairsAtJunctionsAreTheOnesNearAnotherElementsPoints) {
+  // Every design point paired with itself (residual 0): observe() takes exactly the pairs whose
+  // point has no point of another element within the junction radius, found here by comparing
+  // every pair of points. The room spans several of the cells junctions are found in.
+  const PointCloud design = design_room();
+  std::vector<IcpCorrespondence> pairs(design.size());
+  for (std::size_t i = 0; i < design.size(); ++i) {
+    pairs[i].target_index = i;
+    pairs[i].x = pairs[i].q = design.points[i].cast<double>();
+    pairs[i].n = design.normals[i].cast<double>();
+  }
+  for (double radius : {0.13, 0.27}) {  // not a multiple of the spacing: no pair at exactly the radius
+    std::size_t free = 0;
+    for (std::size_t i = 0; i < design.size(); ++i) {
+      bool junction = false;
+      for (std::size_t j = 0; j < design.size() && !junction; ++j) {
+        junction = design.labels[j] != design.labels[i] &&
+                   (design.points[j] - design.points[i]).squaredNorm() <= static_cast<float>(radius * radius);
+      }
+      free += junction ? 0 : 1;
+    }
+    AsBuiltSettings set;
+    set.junction_radius = radius;
+    set.max_residual = 1.0;
+    AsBuiltMap map(design, set);
+    EXPECT_EQ(map.observe(pairs, Vector3d(4, 3, 0.5)), free) << radius;
+    EXPECT_LT(free, design.size());
+    EXPECT_GT(free, design.size() / 2);
+  }
+}
+
 TEST(AsBuiltMapTest, ElementCentroidsAreTheCentresOfTheirRectangles) {
   PointCloud c = design_room();
   const std::size_t floor_points = static_cast<std::size_t>(std::count(c.labels.begin(), c.labels.end(), kFloor));

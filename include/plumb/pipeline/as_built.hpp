@@ -46,6 +46,7 @@
 #include "plumb/core/point_cloud.hpp"
 #include "plumb/core/types.hpp"
 #include "plumb/registration/icp.hpp"
+#include "plumb/search/cell_index.hpp"
 
 namespace plumb {
 
@@ -55,6 +56,15 @@ namespace plumb {
 /// @param counts when not null, receives the number of points of each element
 /// @throws plumb::Error when the cloud has no labels
 std::vector<Vector3d> element_centroids(const PointCloud& cloud, std::vector<std::size_t>* counts = nullptr);
+
+/// @brief The points `indices` of a labelled design cloud (with its normals and labels), every
+///        element e displaced by mean.segment<6>(6 e) = (t, w) about pivots[e]: a design point q at
+///        q + t + w x (q - pivot), its normal n at normalize(n + w x n); elements without an entry
+///        in `mean` (or a zero one) stay where they are. AsBuiltMap::corrected_cloud() is this over
+///        every point, with the current estimate.
+/// @throws plumb::Error when the cloud has no labels or normals, or an index is out of range
+PointCloud displaced_points(const PointCloud& design, const std::vector<std::uint32_t>& indices,
+                            const Eigen::VectorXd& mean, const std::vector<Vector3d>& pivots);
 
 /// @brief Settings of AsBuiltMap.
 struct AsBuiltSettings {
@@ -105,9 +115,14 @@ struct ElementEstimate {
 /// @note Not thread-safe; deterministic.
 class AsBuiltMap {
  public:
-  /// @param design the BIM cloud with normals and per-point element labels (bim::sample_bim_cloud)
-  /// @throws plumb::Error when the cloud has no normals or labels, a negative label, or bad settings
-  explicit AsBuiltMap(const PointCloud& design, const AsBuiltSettings& settings = {});
+  /// @param design the BIM cloud with normals and per-point element labels (bim::sample_bim_cloud);
+  ///        shared, not copied
+  /// @throws plumb::Error when the cloud is null, has no normals or labels, a negative label, or
+  ///         bad settings
+  explicit AsBuiltMap(std::shared_ptr<const PointCloud> design, const AsBuiltSettings& settings = {});
+  /// @brief The same on a copy of `design`.
+  explicit AsBuiltMap(const PointCloud& design, const AsBuiltSettings& settings = {})
+      : AsBuiltMap(std::make_shared<const PointCloud>(design), settings) {}
 
   /// @brief Take one frame's registration: its correspondences (source points moved by the
   ///        registered pose, target indices into `design`) and the robot position the pose error
@@ -116,6 +131,8 @@ class AsBuiltMap {
 
   /// @brief The design cloud moved element by element by the current estimates (normals turned).
   PointCloud corrected_cloud() const;
+  /// @brief The design cloud the map was made from.
+  const PointCloud& design() const { return *design_; }
   /// @brief The estimate of every element: 6 per element, (t, w) of element e at 6e.
   const Eigen::VectorXd& mean() const;
 
@@ -142,8 +159,14 @@ class AsBuiltMap {
   };
 
   AsBuiltSettings settings_;
-  PointCloud design_;
-  std::vector<bool> junction_;  ///< per design point: near another element's points
+  std::shared_ptr<const PointCloud> design_;
+  /// Per design point: near another element's points. Found cell by cell of `cells_` when a pair
+  /// first lands in the cell (`junction_done_`), so a building's size costs nothing until the
+  /// robot sees it.
+  std::vector<bool> junction_;
+  std::vector<bool> junction_done_;
+  std::unique_ptr<CellIndex> cells_;
+  bool junction(std::size_t i);
   std::vector<State> elements_;
   Matrix6d prior_information_ = Matrix6d::Zero();
   /// The data's information over all elements: for element e, the 6x6 blocks (e, f) with f >= e.

@@ -118,6 +118,16 @@ struct BimOdometrySettings {
   bool estimate_as_built = false;
   AsBuiltSettings as_built;               ///< the estimator's settings (construction tolerance, ...)
   std::size_t as_built_refresh_every = 10;  ///< accepted anchors between updates of the registration target
+  /// With the as-built estimate (or register_to), the registration target is the BIM cloud with
+  /// every element displaced as estimated, remade whenever the estimate is taken up. Only its storey
+  /// band is remade: the points whose height lies within the key points' heights at the predicted
+  /// pose, widened by the registration's reach (twice its largest correspondence or overlap
+  /// distance, plus 0.5 m for the registration to move) and then by this margin [m]. Every point a
+  /// registration can pair with lies in it, so the result is the one against the whole model,
+  /// while the storeys above and below cost nothing; a band is cut again when a frame's key points
+  /// leave it (a ramp, a lift). The whole cloud is used when the band holds it (a one-storey
+  /// model); +inf: always. The design itself is one target for every height, made once.
+  double target_band_margin = 0.5;
   /// Threads (0 = every core): the BIM registration's correspondence search (replaces
   /// `icp.threads`), and with more than one, a frame's key points are found on a second thread while
   /// the front end matches its scan. Results are bit-identical for any count (core/parallel.hpp).
@@ -165,6 +175,9 @@ struct BimFrameResult {
   Status icp_status = Status::kInsufficientData;
   double icp_overlap = 0.0;
   std::size_t icp_inliers = 0;
+  /// Points of the BIM cloud the key points were registered against: its storey band, or all of it
+  /// (settings.target_band_margin).
+  std::size_t target_points = 0;
   std::size_t num_key_points = 0;
   int anchor_dof = 0;                   ///< rank of the anchor information (6 = fully constrained)
   /// The key points' registration passed the overlap and inlier gates: T_world_base_registered is the
@@ -276,9 +289,25 @@ class BimOdometry {
   /// Each element `map` has observed weighs the anchors by the estimate's covariance from now on.
   void take_element_covariances(const AsBuiltMap& map);
 
+  /// The part of the BIM cloud a registration is done against (see settings.target_band_margin).
+  struct Target {
+    double z_min = 0.0, z_max = 0.0;  ///< the band: key points may lie at any height in it, less the reach
+    bool whole = false;       ///< the band holds the whole BIM cloud
+    std::vector<std::uint32_t> index;  ///< target point -> BIM cloud point (empty when whole)
+    std::shared_ptr<const PointCloud> cloud;  ///< displaced by target_mean_
+    std::unique_ptr<KdTree3f> tree;
+  };
+  /// The target for key points `keys` at pose T (lidar in world); cut again when they leave its band.
+  const Target& registration_target(const PointCloud& keys, const Eigen::Isometry3d& T);
+  /// From now on register to the BIM cloud with every element displaced by `mean` (6 per element).
+  void displace_target(Eigen::VectorXd mean);
+
   BimOdometrySettings settings_;
-  std::shared_ptr<const PointCloud> bim_;  ///< the registration target: the design, or as estimated
-  std::unique_ptr<KdTree3f> bim_tree_;
+  std::shared_ptr<const PointCloud> bim_;  ///< the BIM cloud as designed
+  double bim_z_min_ = 0.0, bim_z_max_ = 0.0;  ///< heights of its lowest and highest finite points
+  std::unique_ptr<Target> target_;         ///< null until the first registration or after a change
+  Eigen::VectorXd target_mean_;            ///< the target's displacement of every element (empty: the design)
+  std::vector<Vector3d> target_pivot_;     ///< the pivots `target_mean_` turns the elements about
   std::unique_ptr<AsBuiltMap> as_built_;
   std::size_t anchors_since_refresh_ = 0;
   /// Per element label of the BIM cloud: the centroid of its points, and the covariance of its
