@@ -97,8 +97,18 @@ bool AsBuiltMap::junction(std::size_t i) {
 
 PointCloud displaced_points(const PointCloud& design, const std::vector<std::uint32_t>& indices,
                             const Eigen::VectorXd& mean, const std::vector<Vector3d>& pivots) {
-  PLUMB_CHECK(design.has_labels() && design.has_normals(), "displaced_points: the cloud needs labels and normals");
   PointCloud out;
+  displaced_points(design, indices, mean, pivots, out);
+  return out;
+}
+
+void displaced_points(const PointCloud& design, const std::vector<std::uint32_t>& indices,
+                      const Eigen::VectorXd& mean, const std::vector<Vector3d>& pivots, PointCloud& out) {
+  PLUMB_CHECK(design.has_labels() && design.has_normals(), "displaced_points: the cloud needs labels and normals");
+  PLUMB_CHECK(&design != &out, "displaced_points: the output cannot be the design cloud itself");
+  out.intensities.clear();
+  out.rings.clear();
+  out.times.clear();
   out.points.resize(indices.size());
   out.normals.resize(indices.size());
   out.labels.resize(indices.size());
@@ -122,7 +132,6 @@ PointCloud displaced_points(const PointCloud& design, const std::vector<std::uin
     const Vector3d n = design.normals[i].cast<double>();
     out.normals[k] = (n + w.cross(n)).normalized().cast<float>();
   }
-  return out;
 }
 
 double ElementEstimate::displacement_sigma(const Vector3d& q, const Vector3d& direction) const {

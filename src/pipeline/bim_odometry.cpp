@@ -145,6 +145,11 @@ BimOdometry::BimOdometry(std::shared_ptr<const PointCloud> bim_cloud, const Eige
       bim_z_min_ = std::min(bim_z_min_, static_cast<double>(p.z()));
       bim_z_max_ = std::max(bim_z_max_, static_cast<double>(p.z()));
     }
+    // The design's own target (the whole cloud) does not depend on the frames: made here, once.
+    target_ = std::make_unique<Target>();
+    target_->whole = true;
+    target_->cloud = bim_.get();
+    target_->tree = std::make_unique<KdTree3f>(bim_->points);
     if (settings_.estimate_as_built) {
       PLUMB_CHECK(settings_.as_built_refresh_every >= 1, "BimOdometry: as_built_refresh_every must be >= 1");
       as_built_ = std::make_unique<AsBuiltMap>(bim_, settings_.as_built);
@@ -409,13 +414,16 @@ const BimOdometry::Target& BimOdometry::registration_target(const PointCloud& ke
   z_max += reach;
   if (target_ != nullptr && (target_->whole || (target_->z_min <= z_min && z_max <= target_->z_max))) return *target_;
 
-  auto target = std::make_unique<Target>();
+  std::unique_ptr<Target> target = std::move(retired_);
+  if (target == nullptr) target = std::make_unique<Target>();
   target->z_min = z_min - settings_.target_band_margin;
   target->z_max = z_max + settings_.target_band_margin;
   // The design's tree is built once and serves every height; a displaced target is cut to the band.
   target->whole = target_mean_.size() == 0 || (!(target->z_min > bim_z_min_) && !(target->z_max < bim_z_max_));
+  target->index.clear();
   if (target->whole && target_mean_.size() == 0) {
-    target->cloud = bim_;
+    target->displaced = PointCloud{};
+    target->cloud = bim_.get();
   } else {
     const auto lo = static_cast<float>(target->z_min), hi = static_cast<float>(target->z_max);
     target->index.reserve(bim_->size());
@@ -423,10 +431,20 @@ const BimOdometry::Target& BimOdometry::registration_target(const PointCloud& ke
       const float z = bim_->points[i].z();
       if (target->whole || (z >= lo && z <= hi)) target->index.push_back(static_cast<std::uint32_t>(i));
     }
-    target->cloud = std::make_shared<const PointCloud>(displaced_points(*bim_, target->index, target_mean_, target_pivot_));
+    if (target->index.empty()) {  // key points where the model has nothing: the whole model, to fail as it would
+      target->whole = true;
+      target->index.resize(bim_->size());
+      for (std::size_t i = 0; i < bim_->size(); ++i) target->index[i] = static_cast<std::uint32_t>(i);
+    }
+    displaced_points(*bim_, target->index, target_mean_, target_pivot_, target->displaced);
+    target->cloud = &target->displaced;
     if (target->whole) target->index.clear();
   }
-  target->tree = std::make_unique<KdTree3f>(target->cloud->points);
+  if (target->tree != nullptr) {
+    target->tree->rebuild(target->cloud->points);
+  } else {
+    target->tree = std::make_unique<KdTree3f>(target->cloud->points);
+  }
   target_ = std::move(target);
   return *target_;
 }
@@ -434,14 +452,15 @@ const BimOdometry::Target& BimOdometry::registration_target(const PointCloud& ke
 void BimOdometry::displace_target(Eigen::VectorXd mean) {
   if (target_pivot_.empty()) target_pivot_ = element_centroids(*bim_);
   target_mean_ = std::move(mean);
+  if (target_ != nullptr && target_->cloud == &target_->displaced) retired_ = std::move(target_);
   target_.reset();
 }
 
 void BimOdometry::take_element_covariances(const AsBuiltMap& map) {
   for (std::size_t e = 0; e < element_covariance_.size() && e < map.num_elements(); ++e) {
-    if (!map.has_points(e)) continue;
-    const ElementEstimate est = map.element(e);
-    if (est.frames > 0) element_covariance_[e] = est.covariance;
+    // The marginal covariance is a solve over every element: only the observed ones need it.
+    if (!map.has_points(e) || map.frames(e) == 0) continue;
+    element_covariance_[e] = map.element(e).covariance;
   }
 }
 

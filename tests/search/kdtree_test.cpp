@@ -12,6 +12,7 @@
 #include <set>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include "plumb/core/error.hpp"
@@ -382,6 +383,38 @@ TEST(KdTreeTest, EmptyOrAllNonFiniteInputThrows) {
   } catch (const plumb::Error& e) {
     EXPECT_NE(std::string(e.what()).find("KdTree"), std::string::npos) << e.what();
   }
+}
+
+TEST(KdTreeTest, ARebuiltTreeAnswersAsANewOne) {
+  // Rebuilt over a larger cloud, a smaller one (its memory reused), then refused input: every
+  // query answers as a tree built afresh over the same points.
+  plumb::Rng rng(41);
+  plumb::KdTree3f tree(make_cloud<3>(500, Shape::kUniform, 1));
+  for (const auto& [n, shape, seed] : {std::tuple{4000, Shape::kClusters, 2}, std::tuple{900, Shape::kUniform, 3}}) {
+    Points<3> pts = make_cloud<3>(static_cast<std::size_t>(n), shape, static_cast<std::uint64_t>(seed));
+    pts[7] = Eigen::Vector3f(kNaN, 0, 0);
+    tree.rebuild(pts);
+    const plumb::KdTree3f fresh(pts);
+    ASSERT_EQ(tree.size(), fresh.size());
+    ASSERT_EQ(tree.num_input_points(), pts.size());
+    for (int k = 0; k < 200; ++k) {
+      const Eigen::Vector3f q = random_query<3>(rng, 12.0);
+      const std::vector<Neighbor> a = tree.knn(q, 6), b = fresh.knn(q, 6);
+      ASSERT_EQ(a.size(), b.size());
+      for (std::size_t j = 0; j < a.size(); ++j) {
+        ASSERT_EQ(a[j].index, b[j].index) << k;
+        ASSERT_EQ(a[j].dist_sq, b[j].dist_sq) << k;
+      }
+    }
+  }
+  const std::size_t before = tree.size();
+  const Eigen::Vector3f q(1, 2, 3);
+  const std::vector<Neighbor> kept = tree.knn(q, 3);
+  EXPECT_THROW(tree.rebuild(Points<3>(10, Eigen::Vector3f(kNaN, 0, 0))), plumb::Error);
+  EXPECT_EQ(tree.size(), before);
+  const std::vector<Neighbor> after = tree.knn(q, 3);
+  ASSERT_EQ(after.size(), kept.size());
+  for (std::size_t j = 0; j < kept.size(); ++j) EXPECT_EQ(after[j].index, kept[j].index);
 }
 
 TEST(KdTreeTest, NonFinitePointsAreSkipped) {

@@ -65,6 +65,9 @@ std::vector<Vector3d> element_centroids(const PointCloud& cloud, std::vector<std
 /// @throws plumb::Error when the cloud has no labels or normals, or an index is out of range
 PointCloud displaced_points(const PointCloud& design, const std::vector<std::uint32_t>& indices,
                             const Eigen::VectorXd& mean, const std::vector<Vector3d>& pivots);
+/// @brief The same into `out` (its points, normals and labels replaced; their memory reused).
+void displaced_points(const PointCloud& design, const std::vector<std::uint32_t>& indices,
+                      const Eigen::VectorXd& mean, const std::vector<Vector3d>& pivots, PointCloud& out);
 
 /// @brief Settings of AsBuiltMap.
 struct AsBuiltSettings {
@@ -139,6 +142,8 @@ class AsBuiltMap {
   std::size_t num_elements() const { return elements_.size(); }
   /// @brief Estimate of element e (label value e of the design cloud). @throws plumb::Error when out of range.
   ElementEstimate element(std::size_t e) const;
+  /// @brief Frames in which element e was observed (0 for an element out of range).
+  std::size_t frames(std::size_t e) const { return e < elements_.size() ? elements_[e].frames : 0; }
   /// @brief True when the design cloud has points of element e.
   bool has_points(std::size_t e) const { return e < elements_.size() && elements_[e].present; }
   const AsBuiltSettings& settings() const { return settings_; }

@@ -294,7 +294,8 @@ class BimOdometry {
     double z_min = 0.0, z_max = 0.0;  ///< the band: key points may lie at any height in it, less the reach
     bool whole = false;       ///< the band holds the whole BIM cloud
     std::vector<std::uint32_t> index;  ///< target point -> BIM cloud point (empty when whole)
-    std::shared_ptr<const PointCloud> cloud;  ///< displaced by target_mean_
+    PointCloud displaced;              ///< the points displaced by target_mean_ (empty for the design)
+    const PointCloud* cloud = nullptr; ///< &displaced, or the design
     std::unique_ptr<KdTree3f> tree;
   };
   /// The target for key points `keys` at pose T (lidar in world); cut again when they leave its band.
@@ -305,7 +306,10 @@ class BimOdometry {
   BimOdometrySettings settings_;
   std::shared_ptr<const PointCloud> bim_;  ///< the BIM cloud as designed
   double bim_z_min_ = 0.0, bim_z_max_ = 0.0;  ///< heights of its lowest and highest finite points
-  std::unique_ptr<Target> target_;         ///< null until the first registration or after a change
+  std::unique_ptr<Target> target_;         ///< null when the displacement changed since the last registration
+  /// The displaced target the last change of displacement retired: its memory serves the next one
+  /// (a tall model's band is hundreds of megabytes, and fresh pages cost more than filling them).
+  std::unique_ptr<Target> retired_;
   Eigen::VectorXd target_mean_;            ///< the target's displacement of every element (empty: the design)
   std::vector<Vector3d> target_pivot_;     ///< the pivots `target_mean_` turns the elements about
   std::unique_ptr<AsBuiltMap> as_built_;

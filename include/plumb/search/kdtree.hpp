@@ -101,6 +101,11 @@ class KdTree {
   ///         there are 2^32 or more points.
   explicit KdTree(const std::vector<Point>& points, const KdTreeSettings& settings = {});
 
+  /// @brief Build the tree again over `points`, as a new KdTree(points, settings()) would, into
+  ///        the memory this one holds (no fresh pages for a tree of about the same size).
+  /// @throws plumb::Error as the constructor does, and the tree is then left as it was.
+  void rebuild(const std::vector<Point>& points);
+
   /// @brief Build the tree over `cloud.points` (Dim = 3 only); indices refer to the cloud.
   template <int D = Dim, typename = std::enable_if_t<D == 3>>
   explicit KdTree(const PointCloud& cloud, const KdTreeSettings& settings = {})

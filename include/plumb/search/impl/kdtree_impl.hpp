@@ -161,14 +161,19 @@ inline int kd_widest_dim(const KdBuildBox<Dim>& box, float& extent) {
 }  // namespace detail
 
 template <int Dim>
-KdTree<Dim>::KdTree(const std::vector<Point>& points, const KdTreeSettings& settings)
-    : settings_(settings), num_input_points_(points.size()) {
-  PLUMB_CHECK(settings.leaf_size >= 1, "KdTree: settings.leaf_size must be >= 1 (got 0)");
+KdTree<Dim>::KdTree(const std::vector<Point>& points, const KdTreeSettings& settings) : settings_(settings) {
+  rebuild(points);
+}
+
+template <int Dim>
+void KdTree<Dim>::rebuild(const std::vector<Point>& points) {
+  PLUMB_CHECK(settings_.leaf_size >= 1, "KdTree: settings.leaf_size must be >= 1 (got 0)");
   PLUMB_CHECK(points.size() < static_cast<std::size_t>(std::numeric_limits<std::uint32_t>::max()),
               "KdTree: " << points.size() << " points exceed the limit of 2^32 - 1");
   std::size_t n = 0;
   for (const Point& p : points) n += p.allFinite() ? 1 : 0;
   PLUMB_CHECK(n > 0, "KdTree: input has no finite point (" << points.size() << " points given)");
+  num_input_points_ = points.size();
 
   // Each finite point as one record of four floats: its coordinates, then its index's bits in the
   // last lane (see detail::kKdRecord). The build partitions whole records, and turns the buffer
