@@ -123,10 +123,11 @@ struct BimOdometrySettings {
   /// band is remade: the points whose height lies within the key points' heights at the predicted
   /// pose, widened by the registration's reach (twice its largest correspondence or overlap
   /// distance, plus 0.5 m for the registration to move) and then by this margin [m]. Every point a
-  /// registration can pair with lies in it, so the result is the one against the whole model,
-  /// while the storeys above and below cost nothing; a band is cut again when a frame's key points
-  /// leave it (a ramp, a lift). The whole cloud is used when the band holds it (a one-storey
-  /// model); +inf: always. The design itself is one target for every height, made once.
+  /// registration can pair with lies in it (as long as it moves the key points less than 0.5 m
+  /// from their prediction), so the result is the one against the whole model, while the storeys
+  /// above and below cost nothing; a band is cut again when a frame's key points leave it (a ramp,
+  /// a lift). The whole cloud is used when the band holds it (a one-storey model); +inf: always.
+  /// The design itself is one target for every height, made once.
   double target_band_margin = 0.5;
   /// Threads (0 = every core): the BIM registration's correspondence search (replaces
   /// `icp.threads`), and with more than one, a frame's key points are found on a second thread while
