@@ -102,18 +102,22 @@ PointCloud displaced_points(const PointCloud& design, const std::vector<std::uin
   return out;
 }
 
-void displaced_points(const PointCloud& design, const std::vector<std::uint32_t>& indices,
-                      const Eigen::VectorXd& mean, const std::vector<Vector3d>& pivots, PointCloud& out) {
+namespace {
+
+/// displaced_points() of the design points index(0), ..., index(count - 1).
+template <typename Index>
+void displace_into(const PointCloud& design, std::size_t count, Index index, const Eigen::VectorXd& mean,
+                   const std::vector<Vector3d>& pivots, PointCloud& out) {
   PLUMB_CHECK(design.has_labels() && design.has_normals(), "displaced_points: the cloud needs labels and normals");
   PLUMB_CHECK(&design != &out, "displaced_points: the output cannot be the design cloud itself");
   out.intensities.clear();
   out.rings.clear();
   out.times.clear();
-  out.points.resize(indices.size());
-  out.normals.resize(indices.size());
-  out.labels.resize(indices.size());
-  for (std::size_t k = 0; k < indices.size(); ++k) {
-    const std::uint32_t i = indices[k];
+  out.points.resize(count);
+  out.normals.resize(count);
+  out.labels.resize(count);
+  for (std::size_t k = 0; k < count; ++k) {
+    const std::size_t i = index(k);
     PLUMB_CHECK(i < design.size(), "displaced_points: index " << i << " out of range for " << design.size() << " points");
     out.points[k] = design.points[i];
     out.normals[k] = design.normals[i];
@@ -132,6 +136,20 @@ void displaced_points(const PointCloud& design, const std::vector<std::uint32_t>
     const Vector3d n = design.normals[i].cast<double>();
     out.normals[k] = (n + w.cross(n)).normalized().cast<float>();
   }
+}
+
+}  // namespace
+
+void displaced_points(const PointCloud& design, const std::vector<std::uint32_t>& indices,
+                      const Eigen::VectorXd& mean, const std::vector<Vector3d>& pivots, PointCloud& out) {
+  displace_into(
+      design, indices.size(), [&indices](std::size_t k) { return static_cast<std::size_t>(indices[k]); }, mean,
+      pivots, out);
+}
+
+void displaced_points(const PointCloud& design, const Eigen::VectorXd& mean, const std::vector<Vector3d>& pivots,
+                      PointCloud& out) {
+  displace_into(design, design.size(), [](std::size_t k) { return k; }, mean, pivots, out);
 }
 
 double ElementEstimate::displacement_sigma(const Vector3d& q, const Vector3d& direction) const {
@@ -361,11 +379,10 @@ ElementEstimate AsBuiltMap::element(std::size_t e) const {
 }
 
 PointCloud AsBuiltMap::corrected_cloud() const {
-  std::vector<std::uint32_t> all(design_->size());
-  for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<std::uint32_t>(i);
   std::vector<Vector3d> pivots(elements_.size());
   for (std::size_t e = 0; e < elements_.size(); ++e) pivots[e] = elements_[e].pivot;
-  PointCloud out = displaced_points(*design_, all, mean(), pivots);
+  PointCloud out;
+  displaced_points(*design_, mean(), pivots, out);
   out.intensities = design_->intensities;
   out.rings = design_->rings;
   out.times = design_->times;

@@ -158,8 +158,7 @@ BimOdometry::BimOdometry(std::shared_ptr<const PointCloud> bim_cloud, const Eige
       const AsBuiltSettings& ab = settings_.as_built;
       PLUMB_CHECK(ab.sigma_translation > 0.0 && ab.sigma_rotation > 0.0 && ab.point_sigma > 0.0,
                   "BimOdometry: as_built.sigma_translation, sigma_rotation and point_sigma must be > 0");
-      element_pivot_ = element_centroids(*bim_);
-      const std::size_t n = element_pivot_.size();
+      const std::size_t n = element_pivots().size();
       Vector6d prior;
       prior << Vector3d::Constant(ab.sigma_translation * ab.sigma_translation),
           Vector3d::Constant(ab.sigma_rotation * ab.sigma_rotation);
@@ -323,7 +322,7 @@ void BimOdometry::correct(const PointCloud& keys, BimFrameResult& out) {
   out.anchor_attempted = true;
   const Eigen::Isometry3d T_pred = composer_.pose() * settings_.T_base_lidar;
   IcpSettings icp_settings = settings_.icp;
-  icp_settings.keep_correspondences = as_built_ != nullptr || !element_pivot_.empty();
+  icp_settings.keep_correspondences = as_built_ != nullptr || !element_covariance_.empty();
   icp_settings.threads = settings_.threads;
   const Target& target = registration_target(keys, T_pred);
   out.target_points = target.cloud->size();
@@ -350,7 +349,7 @@ void BimOdometry::correct(const PointCloud& keys, BimFrameResult& out) {
   const std::size_t n = icp.num_inliers;
   if (n < settings_.min_anchor_inliers) return;
   Matrix6d H;
-  if (!element_pivot_.empty()) {
+  if (!element_covariance_.empty()) {
     H = element_anchor_information(icp.correspondences, bim_->labels, element_pivot_, element_covariance_,
                                    settings_.as_built.point_sigma, c);
   } else {
@@ -415,32 +414,42 @@ const BimOdometry::Target& BimOdometry::registration_target(const PointCloud& ke
   if (target_ != nullptr && (target_->whole || (target_->z_min <= z_min && z_max <= target_->z_max))) return *target_;
 
   std::unique_ptr<Target> target = std::move(retired_);
+  // A displacement moves the points by centimetres: when the key points lie in the retired
+  // target's band, its points are moved and its tree refitted, with no partition or sort.
+  const bool refit = target != nullptr && target->tree != nullptr &&
+                     (target->whole || (target->z_min <= z_min && z_max <= target->z_max));
   if (target == nullptr) target = std::make_unique<Target>();
-  target->z_min = z_min - settings_.target_band_margin;
-  target->z_max = z_max + settings_.target_band_margin;
-  // The design's tree is built once and serves every height; a displaced target is cut to the band.
-  target->whole = target_mean_.size() == 0 || (!(target->z_min > bim_z_min_) && !(target->z_max < bim_z_max_));
-  target->index.clear();
-  if (target->whole && target_mean_.size() == 0) {
+  if (!refit) {
+    target->z_min = z_min - settings_.target_band_margin;
+    target->z_max = z_max + settings_.target_band_margin;
+    // The design's tree is built once and serves every height; a displaced target is cut to the band.
+    target->whole = target_mean_.size() == 0 || (!(target->z_min > bim_z_min_) && !(target->z_max < bim_z_max_));
+    target->index.clear();
+    if (!target->whole) {
+      const auto lo = static_cast<float>(target->z_min), hi = static_cast<float>(target->z_max);
+      target->index.reserve(bim_->size());
+      for (std::size_t i = 0; i < bim_->size(); ++i) {
+        const float z = bim_->points[i].z();
+        if (z >= lo && z <= hi) target->index.push_back(static_cast<std::uint32_t>(i));
+      }
+      // Key points where the model has nothing: the whole model, to fail as it would.
+      target->whole = target->index.empty();
+    }
+  }
+  if (target_mean_.size() == 0) {
     target->displaced = PointCloud{};
     target->cloud = bim_.get();
   } else {
-    const auto lo = static_cast<float>(target->z_min), hi = static_cast<float>(target->z_max);
-    target->index.reserve(bim_->size());
-    for (std::size_t i = 0; i < bim_->size(); ++i) {
-      const float z = bim_->points[i].z();
-      if (target->whole || (z >= lo && z <= hi)) target->index.push_back(static_cast<std::uint32_t>(i));
+    if (target->whole) {
+      displaced_points(*bim_, target_mean_, element_pivots(), target->displaced);
+    } else {
+      displaced_points(*bim_, target->index, target_mean_, element_pivots(), target->displaced);
     }
-    if (target->index.empty()) {  // key points where the model has nothing: the whole model, to fail as it would
-      target->whole = true;
-      target->index.resize(bim_->size());
-      for (std::size_t i = 0; i < bim_->size(); ++i) target->index[i] = static_cast<std::uint32_t>(i);
-    }
-    displaced_points(*bim_, target->index, target_mean_, target_pivot_, target->displaced);
     target->cloud = &target->displaced;
-    if (target->whole) target->index.clear();
   }
-  if (target->tree != nullptr) {
+  if (refit) {
+    target->tree->refit(target->cloud->points);
+  } else if (target->tree != nullptr) {
     target->tree->rebuild(target->cloud->points);
   } else {
     target->tree = std::make_unique<KdTree3f>(target->cloud->points);
@@ -449,8 +458,12 @@ const BimOdometry::Target& BimOdometry::registration_target(const PointCloud& ke
   return *target_;
 }
 
+const std::vector<Vector3d>& BimOdometry::element_pivots() {
+  if (element_pivot_.empty()) element_pivot_ = element_centroids(*bim_);
+  return element_pivot_;
+}
+
 void BimOdometry::displace_target(Eigen::VectorXd mean) {
-  if (target_pivot_.empty()) target_pivot_ = element_centroids(*bim_);
   target_mean_ = std::move(mean);
   if (target_ != nullptr && target_->cloud == &target_->displaced) retired_ = std::move(target_);
   target_.reset();

@@ -68,6 +68,9 @@ PointCloud displaced_points(const PointCloud& design, const std::vector<std::uin
 /// @brief The same into `out` (its points, normals and labels replaced; their memory reused).
 void displaced_points(const PointCloud& design, const std::vector<std::uint32_t>& indices,
                       const Eigen::VectorXd& mean, const std::vector<Vector3d>& pivots, PointCloud& out);
+/// @brief displaced_points() of every point of `design`, into `out`.
+void displaced_points(const PointCloud& design, const Eigen::VectorXd& mean, const std::vector<Vector3d>& pivots,
+                      PointCloud& out);
 
 /// @brief Settings of AsBuiltMap.
 struct AsBuiltSettings {

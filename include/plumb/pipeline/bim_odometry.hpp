@@ -303,6 +303,8 @@ class BimOdometry {
   const Target& registration_target(const PointCloud& keys, const Eigen::Isometry3d& T);
   /// From now on register to the BIM cloud with every element displaced by `mean` (6 per element).
   void displace_target(Eigen::VectorXd mean);
+  /// element_pivot_, computed at the first call.
+  const std::vector<Vector3d>& element_pivots();
 
   BimOdometrySettings settings_;
   std::shared_ptr<const PointCloud> bim_;  ///< the BIM cloud as designed
@@ -312,11 +314,12 @@ class BimOdometry {
   /// (a tall model's band is hundreds of megabytes, and fresh pages cost more than filling them).
   std::unique_ptr<Target> retired_;
   Eigen::VectorXd target_mean_;            ///< the target's displacement of every element (empty: the design)
-  std::vector<Vector3d> target_pivot_;     ///< the pivots `target_mean_` turns the elements about
   std::unique_ptr<AsBuiltMap> as_built_;
   std::size_t anchors_since_refresh_ = 0;
-  /// Per element label of the BIM cloud: the centroid of its points, and the covariance of its
-  /// displacement in the registration target (prior, or the as-built estimate at the last refresh).
+  /// Per element label of the BIM cloud: the centroid of its points (the pivot every displacement
+  /// turns an element about; see element_pivots()), and the covariance of its displacement in the
+  /// registration target (prior, or the as-built estimate at the last refresh). The covariances
+  /// are there only when the anchors are weighed per element (anchor_from_elements).
   std::vector<Vector3d> element_pivot_;
   std::vector<Matrix6d> element_covariance_;
   ScanOdometry front_end_;

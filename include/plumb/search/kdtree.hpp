@@ -87,7 +87,7 @@ struct KdTreeSettings {
 /// All distances are squared Euclidean distances in float [m^2]. Searches are exact (no
 /// approximation factor). Among points at exactly equal distance the one that is returned is
 /// unspecified.
-/// @note The tree is immutable after construction; every query is const, keeps no shared
+/// @note The tree changes only through rebuild() and refit(); every query is const, keeps no shared
 ///       scratch state, and may be called concurrently from any number of threads.
 template <int Dim>
 class KdTree {
@@ -105,6 +105,18 @@ class KdTree {
   ///        the memory this one holds (no fresh pages for a tree of about the same size).
   /// @throws plumb::Error as the constructor does, and the tree is then left as it was.
   void rebuild(const std::vector<Point>& points);
+
+  /// @brief Move the stored points to `points` and keep the tree's cells: each node's bounds are
+  ///        taken again from the points under it (O(n), no partition or sort).
+  ///
+  /// For a cloud that deforms a little between uses, such as a building model whose elements are
+  /// displaced by centimetres: queries stay exact (a parent's cut may then overlap its sibling's,
+  /// which the search allows) and cost about what a rebuilt tree's would while the points move by
+  /// less than a leaf cell; they slow down, never err, as they move farther.
+  /// @param points the same number of points as the tree was built (or last rebuilt) from, finite
+  ///        exactly where those were; index i is the point that was index i.
+  /// @throws plumb::Error when the size or the finite points differ; the tree is then left as it was.
+  void refit(const std::vector<Point>& points);
 
   /// @brief Build the tree over `cloud.points` (Dim = 3 only); indices refer to the cloud.
   template <int D = Dim, typename = std::enable_if_t<D == 3>>

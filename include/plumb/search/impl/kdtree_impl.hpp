@@ -301,6 +301,87 @@ void KdTree<Dim>::build() {
   }
 }
 
+template <int Dim>
+void KdTree<Dim>::refit(const std::vector<Point>& points) {
+  PLUMB_CHECK(points.size() == num_input_points_, "KdTree::refit: " << points.size()
+                                                      << " points given, the tree was built from "
+                                                      << num_input_points_);
+  std::size_t finite = 0;
+  for (const Point& p : points) finite += p.allFinite() ? 1 : 0;
+  PLUMB_CHECK(finite == size_, "KdTree::refit: " << finite << " finite points given, the tree holds " << size_);
+  constexpr std::size_t R = detail::kKdRecord;
+  // Nothing is written before every stored index is known to be finite (the tree stays as it was
+  // on a throw). With as many finite points as stored ones, that holds at once when the tree
+  // skipped none; otherwise each stored index is looked at.
+  if (num_skipped() > 0) {
+    for (const Node& node : nodes_) {
+      if (node.dim >= 0) continue;
+      const std::uint32_t m = node.b - node.a;
+      const float* ids = coords_.data() + R * node.a + (R - 1) * m;
+      for (std::uint32_t j = 0; j < m; ++j) {
+        const std::uint32_t i = leaf_id(ids, j);
+        PLUMB_CHECK(points[i].allFinite(),
+                    "KdTree::refit: point " << i << " is not finite, it was when the tree was built");
+      }
+    }
+  }
+  // The leaves' blocks, in storage order (a gather from `points`: the loads of one leaf are
+  // independent, so they overlap).
+  for (const Node& node : nodes_) {
+    if (node.dim >= 0) continue;
+    const std::uint32_t m = node.b - node.a;
+    float* x = coords_.data() + R * node.a;
+    const float* ids = x + (R - 1) * m;
+    for (std::uint32_t j = 0; j < m; ++j) {
+      const Point& p = points[leaf_id(ids, j)];
+      for (int k = 0; k < Dim; ++k) x[static_cast<std::size_t>(k) * m + j] = p[k];
+    }
+  }
+  // Bottom-up: a node's children come after it (depth-first order), so a reverse sweep meets both
+  // children of a node before the node. Each node's box is kept until its parent has read it.
+  std::vector<float> boxes(2 * Dim * nodes_.size());
+  for (std::size_t id = nodes_.size(); id-- > 0;) {
+    Node& node = nodes_[id];
+    float lo[Dim], hi[Dim];
+    if (node.dim < 0) {
+      const std::uint32_t m = node.b - node.a;
+      const float* x = coords_.data() + R * node.a;
+      bool coincide = true;
+      for (int k = 0; k < Dim; ++k) {
+        const float* row = x + static_cast<std::size_t>(k) * m;
+        float l = row[0], h = row[0];
+        for (std::uint32_t j = 1; j < m; ++j) {
+          l = std::min(l, row[j]);
+          h = std::max(h, row[j]);
+        }
+        lo[k] = l;
+        hi[k] = h;
+        coincide = coincide && l == h;
+      }
+      // A bucket is scanned as one point only while its points coincide.
+      if (node.dim == kCoincidentLeaf && !coincide) node.dim = kLeaf;
+    } else {
+      const float* left = boxes.data() + 2 * Dim * (id + 1);
+      const float* right = boxes.data() + 2 * Dim * node.a;
+      node.lo = left[Dim + node.dim];  // the left child's largest coordinate along dim
+      node.hi = right[node.dim];       // the right child's smallest
+      for (int k = 0; k < Dim; ++k) {
+        lo[k] = std::min(left[k], right[k]);
+        hi[k] = std::max(left[Dim + k], right[Dim + k]);
+      }
+    }
+    float* box = boxes.data() + 2 * Dim * id;
+    for (int k = 0; k < Dim; ++k) {
+      box[k] = lo[k];
+      box[Dim + k] = hi[k];
+    }
+  }
+  for (int k = 0; k < Dim; ++k) {
+    box_lo_[k] = boxes[static_cast<std::size_t>(k)];
+    box_hi_[k] = boxes[static_cast<std::size_t>(Dim + k)];
+  }
+}
+
 // ---- queries ----------------------------------------------------------------------------------
 
 /// Squared distance from q to the bounding box of all points, with its per-dimension terms.
@@ -423,9 +504,10 @@ void KdTree<Dim>::search(const float* q, float* box_d, Set& set) const {
   Pending stack[kMaxStack];
   int top = 0;
   // Branch-free step: the nearer child is next, the farther one is pushed (and dropped at once
-  // when its bound cannot beat the set). lo <= hi, so on the side of the midpoint that q lies on,
-  // its offset to the other child's boundary has the sign that makes t * t the distance to that
-  // child's slab. Returns the nearer child.
+  // when its bound cannot beat the set). The farther child's slab lies beyond its boundary, at
+  // distance max(q - lo, 0) on the left or max(hi - q, 0) on the right: clamped, because after a
+  // refit() a cut may overlap its sibling (lo > hi) and q may lie inside both slabs. Returns the
+  // nearer child.
   auto step = [&](std::uint32_t id) {
     const Node& node = nodes[id];
     const int dim = node.dim;
@@ -435,7 +517,7 @@ void KdTree<Dim>::search(const float* q, float* box_d, Set& set) const {
     const std::uint32_t left_child = id + 1;
     const std::uint32_t near_child = go_right ? node.a : left_child;
     const std::uint32_t far_child = go_right ? left_child : node.a;
-    const float t = go_right ? diff_lo : diff_hi;
+    const float t = go_right ? std::max(diff_lo, 0.0f) : std::min(diff_hi, 0.0f);
     const float cut = t * t;
     Pending& p = stack[top];
     float far_bound = 0.0f;
