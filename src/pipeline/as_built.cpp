@@ -104,12 +104,27 @@ PointCloud displaced_points(const PointCloud& design, const std::vector<std::uin
 
 namespace {
 
+/// One element's displacement in displaced_points(): q -> q + t + w x (q - pivot).
+struct ElementMove {
+  Vector3d t, w, pivot;
+};
+
 /// displaced_points() of the design points index(0), ..., index(count - 1).
 template <typename Index>
 void displace_into(const PointCloud& design, std::size_t count, Index index, const Eigen::VectorXd& mean,
                    const std::vector<Vector3d>& pivots, PointCloud& out) {
   PLUMB_CHECK(design.has_labels() && design.has_normals(), "displaced_points: the cloud needs labels and normals");
   PLUMB_CHECK(&design != &out, "displaced_points: the output cannot be the design cloud itself");
+  // Each element's displacement looked up once, not at each of its points (a tall model's band is
+  // millions of points and a few hundred elements).
+  const std::size_t elements = std::min(static_cast<std::size_t>(mean.size() / 6), pivots.size());
+  std::vector<ElementMove> moves(elements);
+  std::vector<char> moved(elements, 0);
+  for (std::size_t e = 0; e < elements; ++e) {
+    const Vector6d d = mean.segment<6>(static_cast<Eigen::Index>(6 * e));
+    moved[e] = d.isZero(0.0) ? 0 : 1;
+    moves[e] = ElementMove{d.head<3>(), d.tail<3>(), pivots[e]};
+  }
   out.intensities.clear();
   out.rings.clear();
   out.times.clear();
@@ -119,22 +134,18 @@ void displace_into(const PointCloud& design, std::size_t count, Index index, con
   for (std::size_t k = 0; k < count; ++k) {
     const std::size_t i = index(k);
     PLUMB_CHECK(i < design.size(), "displaced_points: index " << i << " out of range for " << design.size() << " points");
-    out.points[k] = design.points[i];
-    out.normals[k] = design.normals[i];
-    out.labels[k] = design.labels[i];
     const std::int32_t label = design.labels[i];
-    if (label < 0 || 6 * static_cast<Eigen::Index>(label) + 6 > mean.size() ||
-        static_cast<std::size_t>(label) >= pivots.size()) {
+    out.labels[k] = label;
+    if (label < 0 || static_cast<std::size_t>(label) >= elements || moved[static_cast<std::size_t>(label)] == 0) {
+      out.points[k] = design.points[i];
+      out.normals[k] = design.normals[i];
       continue;
     }
-    const auto e = static_cast<std::size_t>(label);
-    const Vector6d d = mean.segment<6>(static_cast<Eigen::Index>(6 * e));
-    if (d.isZero(0.0)) continue;
+    const ElementMove& m = moves[static_cast<std::size_t>(label)];
     const Vector3d q = design.points[i].cast<double>();
-    const Vector3d w = d.tail<3>();
-    out.points[k] = (q + d.head<3>() + w.cross(q - pivots[e])).cast<float>();
+    out.points[k] = (q + m.t + m.w.cross(q - m.pivot)).cast<float>();
     const Vector3d n = design.normals[i].cast<double>();
-    out.normals[k] = (n + w.cross(n)).normalized().cast<float>();
+    out.normals[k] = (n + m.w.cross(n)).normalized().cast<float>();
   }
 }
 

@@ -154,6 +154,35 @@ TEST_F(AsBuiltRunTest, RegisteringToAMapThatHasSeenNothingChangesNothing) {
   EXPECT_GT(plain.composer().num_accepted(), 30u);
 }
 
+TEST_F(AsBuiltRunTest, KeyPointsWhereTheModelHasNothingAreRegisteredToTheWholeModel) {
+  // Started 50 m above the building, every frame's key points lie at heights where the model has
+  // no point: the band of a displaced target would be empty, so it is the whole model instead, and
+  // each registration fails as it does against the design (nothing within reach).
+  const plumb::io::FrameDumpReader dump(dir_);
+  auto cloud = std::make_shared<const plumb::PointCloud>(plumb::bim::sample_bim_cloud(*mesh_, 0.05));
+  plumb::BimOdometrySettings s;
+  s.T_base_lidar = dump.meta().T_base_lidar;
+  Eigen::Isometry3d start = dump.ground_truth().poses.front();
+  start.translation().z() += 50.0;
+  plumb::BimOdometry plain(cloud, start, s), given(cloud, start, s);
+  given.register_to(plumb::AsBuiltMap(*cloud));
+  const plumb::OdometryInterpolator odom(dump.odometry());
+  std::size_t attempted = 0;
+  for (std::size_t i = 0; i < 12; ++i) {
+    const plumb::PointCloud frame = dump.frame(i);
+    const plumb::Pose2 o = odom.at(dump.stamp(i));
+    const plumb::BimFrameResult a = plain.process(frame, dump.stamp(i), o);
+    const plumb::BimFrameResult b = given.process(frame, dump.stamp(i), o);
+    ASSERT_TRUE(a.T_world_base.isApprox(b.T_world_base, 0.0)) << "frame " << i;
+    ASSERT_EQ(a.anchor.decision, b.anchor.decision) << "frame " << i;
+    if (!b.anchor_attempted) continue;
+    ++attempted;
+    EXPECT_EQ(b.target_points, cloud->size()) << "frame " << i;
+    EXPECT_NE(b.anchor.decision, plumb::AnchorDecision::kAccepted) << "frame " << i;
+  }
+  EXPECT_GT(attempted, 5u);
+}
+
 TEST_F(AsBuiltRunTest, RegisterToRefusesAnOdometryThatEstimatesItselfOrAnotherCloud) {
   auto cloud = std::make_shared<const plumb::PointCloud>(plumb::bim::sample_bim_cloud(*mesh_, 0.05));
   const plumb::AsBuiltMap map(*cloud);
