@@ -416,7 +416,7 @@ const BimOdometry::Target& BimOdometry::registration_target(const PointCloud& ke
   std::unique_ptr<Target> target = std::move(retired_);
   // A displacement moves the points by centimetres: when the key points lie in the retired
   // target's band, its points are moved and its tree refitted, with no partition or sort.
-  const bool refit = target != nullptr && target->tree != nullptr &&
+  const bool refit = target_mean_.size() != 0 && target != nullptr && target->tree != nullptr &&
                      (target->whole || (target->z_min <= z_min && z_max <= target->z_max));
   if (target == nullptr) target = std::make_unique<Target>();
   if (!refit) {

@@ -337,12 +337,18 @@ void KdTree<Dim>::refit(const std::vector<Point>& points) {
       for (int k = 0; k < Dim; ++k) x[static_cast<std::size_t>(k) * m + j] = p[k];
     }
   }
-  // Bottom-up: a node's children come after it (depth-first order), so a reverse sweep meets both
-  // children of a node before the node. Each node's box is kept until its parent has read it.
-  std::vector<float> boxes(2 * Dim * nodes_.size());
+  // Bottom-up. The nodes are in depth-first order (a node, its left subtree, its right subtree),
+  // so the reverse sweep meets a node's right subtree, then its left one, then the node: with each
+  // subtree leaving its box on a stack, a node finds its left child's box on top and its right
+  // child's below. The stack holds at most one box per level.
+  struct Box {
+    float lo[Dim], hi[Dim];
+  };
+  std::vector<Box> stack;
+  stack.reserve(max_depth_ + 2);
   for (std::size_t id = nodes_.size(); id-- > 0;) {
     Node& node = nodes_[id];
-    float lo[Dim], hi[Dim];
+    Box box;
     if (node.dim < 0) {
       const std::uint32_t m = node.b - node.a;
       const float* x = coords_.data() + R * node.a;
@@ -354,31 +360,29 @@ void KdTree<Dim>::refit(const std::vector<Point>& points) {
           l = std::min(l, row[j]);
           h = std::max(h, row[j]);
         }
-        lo[k] = l;
-        hi[k] = h;
+        box.lo[k] = l;
+        box.hi[k] = h;
         coincide = coincide && l == h;
       }
       // A bucket is scanned as one point only while its points coincide.
       if (node.dim == kCoincidentLeaf && !coincide) node.dim = kLeaf;
     } else {
-      const float* left = boxes.data() + 2 * Dim * (id + 1);
-      const float* right = boxes.data() + 2 * Dim * node.a;
-      node.lo = left[Dim + node.dim];  // the left child's largest coordinate along dim
-      node.hi = right[node.dim];       // the right child's smallest
+      const Box left = stack.back();
+      stack.pop_back();
+      const Box right = stack.back();
+      stack.pop_back();
+      node.lo = left.hi[node.dim];  // the left child's largest coordinate along dim
+      node.hi = right.lo[node.dim]; // the right child's smallest
       for (int k = 0; k < Dim; ++k) {
-        lo[k] = std::min(left[k], right[k]);
-        hi[k] = std::max(left[Dim + k], right[Dim + k]);
+        box.lo[k] = std::min(left.lo[k], right.lo[k]);
+        box.hi[k] = std::max(left.hi[k], right.hi[k]);
       }
     }
-    float* box = boxes.data() + 2 * Dim * id;
-    for (int k = 0; k < Dim; ++k) {
-      box[k] = lo[k];
-      box[Dim + k] = hi[k];
-    }
+    stack.push_back(box);
   }
   for (int k = 0; k < Dim; ++k) {
-    box_lo_[k] = boxes[static_cast<std::size_t>(k)];
-    box_hi_[k] = boxes[static_cast<std::size_t>(Dim + k)];
+    box_lo_[k] = stack.back().lo[k];
+    box_hi_[k] = stack.back().hi[k];
   }
 }
 
