@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // KdTree build, kNN-10 and NN-1 against nanoflann, PCL and Open3D on real clouds (single thread).
-// Names: kdtree_{build,knn10,nn1}/<impl>/<dataset>. Queries are a fixed strided subset of the
-// cloud's own points (kNumQueries), the same for every implementation; trees are built outside the
-// timed loop for queries. Datasets missing from the data dir are skipped with a note on stderr.
+// Names: kdtree_{build,knn10,nn1}/<impl>/<dataset>, and plumb's kdtree_refit and
+// kdtree_knn10_refitted (a tree whose points moved; no peer has one). Queries are a fixed strided
+// subset of the cloud's own points (kNumQueries), the same for every implementation; trees are
+// built outside the timed loop for queries. Datasets missing from the data dir are skipped with a note on stderr.
 
 #include <benchmark/benchmark.h>
 
@@ -13,6 +14,8 @@
 #include <memory>
 #include <string>
 #include <vector>
+
+#include <Eigen/Geometry>
 
 #include "plumb/core/point_cloud.hpp"
 #include "plumb/io/pcd.hpp"
@@ -91,6 +94,53 @@ void plumb_knn10(benchmark::State& state, const Dataset* ds) {
     }
   }
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * ds->queries.size()));
+}
+
+/// The dataset's points shifted by 1 cm and turned by 0.2 degrees about z around their first
+/// point: how far a building's element moves from its design (the as-built registration target).
+std::vector<Eigen::Vector3f> moved_a_little(const Dataset* ds) {
+  const Eigen::Vector3f pivot = ds->points.front();
+  const Eigen::Matrix3f R = Eigen::AngleAxisf(0.2f * 3.14159265f / 180.0f, Eigen::Vector3f::UnitZ()).toRotationMatrix();
+  std::vector<Eigen::Vector3f> out(ds->points.size());
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    out[i] = R * (ds->points[i] - pivot) + pivot + Eigen::Vector3f(0.01f, -0.01f, 0.005f);
+  }
+  return out;
+}
+
+// A tree moved to the points moved a little, and back, each iteration one refit: the work a
+// rebuild does (kdtree_build) when a cloud deforms. No peer refits a tree; theirs rebuild.
+void plumb_refit(benchmark::State& state, const Dataset* ds) {
+  const std::vector<Eigen::Vector3f> moved = moved_a_little(ds);
+  plumb::KdTree3f tree(ds->points, plumb_settings());
+  bool there = false;
+  for (auto _ : state) {
+    there = !there;
+    tree.refit(there ? moved : ds->points);
+    benchmark::DoNotOptimize(tree.size());
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * ds->points.size()));
+}
+
+// kNN-10 in a tree refitted to the moved points, at the moved queries: against kdtree_knn10, what
+// the kept cells cost the queries.
+void plumb_knn10_refitted(benchmark::State& state, const Dataset* ds) {
+  const std::vector<Eigen::Vector3f> moved = moved_a_little(ds);
+  plumb::KdTree3f tree(ds->points, plumb_settings());
+  tree.refit(moved);
+  const std::size_t n = moved.size();
+  const std::size_t m = ds->queries.size();
+  std::vector<Eigen::Vector3f> queries(m);
+  for (std::size_t i = 0; i < m; ++i) queries[i] = moved[i * n / m];
+  std::size_t idx[10];
+  float d[10];
+  for (auto _ : state) {
+    for (const auto& q : queries) {
+      benchmark::DoNotOptimize(tree.knn(q, 10, idx, d));
+      benchmark::DoNotOptimize(d[9]);
+    }
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * m));
 }
 
 void plumb_nn1(benchmark::State& state, const Dataset* ds) {
@@ -261,6 +311,8 @@ int main(int argc, char** argv) {
     for (const Impl& impl : impls) add("kdtree_build", impl.name, ds, impl.build);
     for (const Impl& impl : impls) add("kdtree_knn10", impl.name, ds, impl.knn10);
     for (const Impl& impl : impls) add("kdtree_nn1", impl.name, ds, impl.nn1);
+    add("kdtree_refit", "plumb", ds, plumb_refit);
+    add("kdtree_knn10_refitted", "plumb", ds, plumb_knn10_refitted);
   }
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
