@@ -52,6 +52,35 @@ class AsBuiltRunTest : public ::testing::Test {
     delete mesh_;
     mesh_ = nullptr;
   }
+  /// Frames 0 .. frames - 1 through two design odometries started at the true pose raised by
+  /// `lift` [m]: `plain`, and `given`, registered to an as-built map that has observed nothing.
+  struct BesideUnseenMap {
+    std::vector<plumb::BimFrameResult> plain, given;
+    std::size_t plain_accepted = 0;
+    std::size_t bim_points = 0;
+  };
+  static BesideUnseenMap run_beside_unseen_map(double lift, std::size_t frames) {
+    const plumb::io::FrameDumpReader dump(dir_);
+    auto cloud = std::make_shared<const plumb::PointCloud>(plumb::bim::sample_bim_cloud(*mesh_, 0.05));
+    plumb::BimOdometrySettings s;
+    s.T_base_lidar = dump.meta().T_base_lidar;
+    Eigen::Isometry3d start = dump.ground_truth().poses.front();
+    start.translation().z() += lift;
+    plumb::BimOdometry plain(cloud, start, s), given(cloud, start, s);
+    given.register_to(plumb::AsBuiltMap(*cloud));
+    const plumb::OdometryInterpolator odom(dump.odometry());
+    BesideUnseenMap out;
+    for (std::size_t i = 0; i < frames; ++i) {
+      const plumb::PointCloud frame = dump.frame(i);
+      const plumb::Pose2 o = odom.at(dump.stamp(i));
+      out.plain.push_back(plain.process(frame, dump.stamp(i), o));
+      out.given.push_back(given.process(frame, dump.stamp(i), o));
+    }
+    out.plain_accepted = plain.composer().num_accepted();
+    out.bim_points = cloud->size();
+    return out;
+  }
+
   static plumb::RunReport run(bool as_built, bool refine = false) {
     const plumb::io::FrameDumpReader dump(dir_);
     plumb::RunSettings settings;
@@ -135,49 +164,28 @@ TEST_F(AsBuiltRunTest, ASecondPassOverTheBuildingAsEstimatedImprovesOnTheFirst) 
 TEST_F(AsBuiltRunTest, RegisteringToAMapThatHasSeenNothingChangesNothing) {
   // A map that has observed nothing is the design with the construction tolerance: the odometry
   // registered to it gives the same poses, bit for bit, as one that was never given it.
-  const plumb::io::FrameDumpReader dump(dir_);
-  auto cloud = std::make_shared<const plumb::PointCloud>(plumb::bim::sample_bim_cloud(*mesh_, 0.05));
-  plumb::BimOdometrySettings s;
-  s.T_base_lidar = dump.meta().T_base_lidar;
-  const Eigen::Isometry3d start = dump.ground_truth().poses.front();
-  plumb::BimOdometry plain(cloud, start, s), given(cloud, start, s);
-  given.register_to(plumb::AsBuiltMap(*cloud));
-  const plumb::OdometryInterpolator odom(dump.odometry());
-  for (std::size_t i = 0; i < 40; ++i) {
-    const plumb::PointCloud frame = dump.frame(i);
-    const plumb::Pose2 o = odom.at(dump.stamp(i));
-    const plumb::BimFrameResult a = plain.process(frame, dump.stamp(i), o);
-    const plumb::BimFrameResult b = given.process(frame, dump.stamp(i), o);
-    ASSERT_TRUE(a.T_world_base.isApprox(b.T_world_base, 0.0)) << "frame " << i;
-    ASSERT_EQ(a.anchor.decision, b.anchor.decision) << "frame " << i;
+  const BesideUnseenMap r = run_beside_unseen_map(0.0, 40);
+  for (std::size_t i = 0; i < r.plain.size(); ++i) {
+    ASSERT_TRUE(r.plain[i].T_world_base.isApprox(r.given[i].T_world_base, 0.0)) << "frame " << i;
+    ASSERT_EQ(r.plain[i].anchor.decision, r.given[i].anchor.decision) << "frame " << i;
   }
-  EXPECT_GT(plain.composer().num_accepted(), 30u);
+  EXPECT_GT(r.plain_accepted, 30u);
 }
 
 TEST_F(AsBuiltRunTest, KeyPointsWhereTheModelHasNothingAreRegisteredToTheWholeModel) {
   // Started 50 m above the building, every frame's key points lie at heights where the model has
   // no point: the band of a displaced target would be empty, so it is the whole model instead, and
   // each registration fails as it does against the design (nothing within reach).
-  const plumb::io::FrameDumpReader dump(dir_);
-  auto cloud = std::make_shared<const plumb::PointCloud>(plumb::bim::sample_bim_cloud(*mesh_, 0.05));
-  plumb::BimOdometrySettings s;
-  s.T_base_lidar = dump.meta().T_base_lidar;
-  Eigen::Isometry3d start = dump.ground_truth().poses.front();
-  start.translation().z() += 50.0;
-  plumb::BimOdometry plain(cloud, start, s), given(cloud, start, s);
-  given.register_to(plumb::AsBuiltMap(*cloud));
-  const plumb::OdometryInterpolator odom(dump.odometry());
+  const BesideUnseenMap r = run_beside_unseen_map(50.0, 12);
   std::size_t attempted = 0;
-  for (std::size_t i = 0; i < 12; ++i) {
-    const plumb::PointCloud frame = dump.frame(i);
-    const plumb::Pose2 o = odom.at(dump.stamp(i));
-    const plumb::BimFrameResult a = plain.process(frame, dump.stamp(i), o);
-    const plumb::BimFrameResult b = given.process(frame, dump.stamp(i), o);
+  for (std::size_t i = 0; i < r.plain.size(); ++i) {
+    const plumb::BimFrameResult& a = r.plain[i];
+    const plumb::BimFrameResult& b = r.given[i];
     ASSERT_TRUE(a.T_world_base.isApprox(b.T_world_base, 0.0)) << "frame " << i;
     ASSERT_EQ(a.anchor.decision, b.anchor.decision) << "frame " << i;
     if (!b.anchor_attempted) continue;
     ++attempted;
-    EXPECT_EQ(b.target_points, cloud->size()) << "frame " << i;
+    EXPECT_EQ(b.target_points, r.bim_points) << "frame " << i;
     EXPECT_NE(b.anchor.decision, plumb::AnchorDecision::kAccepted) << "frame " << i;
   }
   EXPECT_GT(attempted, 5u);
