@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -55,10 +57,17 @@ std::vector<std::string> tum_lines(const Trajectory& t) {
   return lines;
 }
 
-/// The reference both eval tests compare against.
+/// The reference the eval tests compare against, one file per test process: ctest runs the tests
+/// of this binary in parallel, and one process rewriting it while another read it made the reader
+/// see an empty file.
 std::string reference_file() {
-  static const std::string path = write_lines("bad_input_ref.tum", tum_lines(test::circle_trajectory(200)));
-  return path;
+  struct File {
+    std::string path = write_lines("bad_input_ref_" + std::to_string(::getpid()) + ".tum",
+                                   tum_lines(test::circle_trajectory(200)));
+    ~File() { std::remove(path.c_str()); }
+  };
+  static const File file;
+  return file.path;
 }
 
 // ---- eval: trajectories that would give numbers that look valid --------------------------------
