@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <set>
 #include <string>
@@ -20,6 +21,7 @@
 #include "plumb/core/point_cloud.hpp"
 #include "plumb/core/rng.hpp"
 #include "plumb/search/brute_force.hpp"
+#include "kdtree_oracle.hpp"
 #include "test_data.hpp"
 
 #if __has_include("plumb/io/pcd.hpp")
@@ -29,166 +31,7 @@
 
 namespace {
 
-using plumb::BruteForceSearch;
-using plumb::KdTree;
-using plumb::KdTreeSettings;
-using plumb::Neighbor;
-
-constexpr float kInf = std::numeric_limits<float>::infinity();
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-
-enum class Shape { kUniform, kClusters };
-
-template <int Dim>
-using Points = std::vector<Eigen::Matrix<float, Dim, 1>>;
-
-template <int Dim>
-Points<Dim> make_cloud(std::size_t n, Shape shape, std::uint64_t seed) {
-  plumb::Rng rng(seed);
-  Points<Dim> pts(n);
-  std::vector<Eigen::Matrix<float, Dim, 1>> centers(5);
-  for (auto& c : centers) {
-    for (int k = 0; k < Dim; ++k) c[k] = static_cast<float>(rng.uniform(-10.0, 10.0));
-  }
-  for (auto& p : pts) {
-    if (shape == Shape::kUniform) {
-      for (int k = 0; k < Dim; ++k) p[k] = static_cast<float>(rng.uniform(-10.0, 10.0));
-    } else {
-      const auto& c = centers[rng.uniform_index(centers.size())];
-      const double sigma = 0.05 + 0.5 * static_cast<double>(rng.uniform_index(3));
-      for (int k = 0; k < Dim; ++k) p[k] = c[k] + static_cast<float>(rng.normal(0.0, sigma));
-    }
-  }
-  return pts;
-}
-
-template <int Dim>
-Eigen::Matrix<float, Dim, 1> random_query(plumb::Rng& rng, double half_width) {
-  Eigen::Matrix<float, Dim, 1> q;
-  for (int k = 0; k < Dim; ++k) q[k] = static_cast<float>(rng.uniform(-half_width, half_width));
-  return q;
-}
-
-template <int Dim>
-float true_dist_sq(const Points<Dim>& pts, std::size_t i, const Eigen::Matrix<float, Dim, 1>& q) {
-  return plumb::detail::dist_sq<Dim>(pts[i].data(), q.data());
-}
-
-// kNN of the tree equals the oracle's up to ties: the same sorted distances, every index distinct,
-// finite, and at the distance reported for it.
-template <int Dim>
-void expect_knn_equal(const std::vector<const KdTree<Dim>*>& trees,
-                      const BruteForceSearch<Dim>& oracle, const Points<Dim>& pts,
-                      const Eigen::Matrix<float, Dim, 1>& q, std::size_t k,
-                      const std::string& what) {
-  std::vector<std::size_t> bi;
-  std::vector<float> bd;
-  const std::size_t bn = oracle.knn(q, k, bi, bd);
-  for (const KdTree<Dim>* tree : trees) {
-    std::vector<std::size_t> ti;
-    std::vector<float> td;
-    const std::size_t tn = tree->knn(q, k, ti, td);
-    ASSERT_EQ(tn, bn) << what;
-    ASSERT_EQ(ti.size(), tn) << what;
-    ASSERT_EQ(td.size(), tn) << what;
-    EXPECT_EQ(td, bd) << what << " k=" << k;
-    std::set<std::size_t> seen;
-    for (std::size_t i = 0; i < tn; ++i) {
-      ASSERT_LT(ti[i], pts.size()) << what;
-      EXPECT_TRUE(pts[ti[i]].allFinite()) << what;
-      EXPECT_EQ(td[i], true_dist_sq<Dim>(pts, ti[i], q)) << what;
-      seen.insert(ti[i]);
-    }
-    EXPECT_EQ(seen.size(), tn) << what << ": repeated index";
-    EXPECT_TRUE(std::is_sorted(td.begin(), td.end())) << what;
-  }
-}
-
-template <int Dim>
-void expect_knn_equal(const KdTree<Dim>& tree, const BruteForceSearch<Dim>& oracle,
-                      const Points<Dim>& pts, const Eigen::Matrix<float, Dim, 1>& q, std::size_t k,
-                      const std::string& what) {
-  expect_knn_equal<Dim>({&tree}, oracle, pts, q, k, what);
-}
-
-// Bounded kNN equals the oracle's kNN cut at the bound: the same sorted distances, indices at
-// the distances reported for them.
-template <int Dim>
-void expect_bounded_knn_equal(const std::vector<const KdTree<Dim>*>& trees,
-                              const BruteForceSearch<Dim>& oracle, const Points<Dim>& pts,
-                              const Eigen::Matrix<float, Dim, 1>& q, std::size_t k, float max_dist_sq,
-                              const std::string& what) {
-  std::vector<std::size_t> bi;
-  std::vector<float> bd;
-  oracle.knn(q, k, bi, bd);
-  while (!bd.empty() && !(bd.back() <= max_dist_sq)) bd.pop_back();
-  for (const KdTree<Dim>* tree : trees) {
-    std::vector<std::size_t> ti(k + 1);
-    std::vector<float> td(k + 1);
-    const std::size_t tn = tree->knn(q, k, ti.data(), td.data(), max_dist_sq);
-    td.resize(tn);
-    EXPECT_EQ(td, bd) << what << " k=" << k << " max_dist_sq=" << max_dist_sq;
-    for (std::size_t i = 0; i < tn; ++i) {
-      ASSERT_LT(ti[i], pts.size()) << what;
-      EXPECT_EQ(td[i], true_dist_sq<Dim>(pts, ti[i], q)) << what;
-    }
-  }
-}
-
-template <int Dim>
-void expect_radius_equal(const std::vector<const KdTree<Dim>*>& trees,
-                         const BruteForceSearch<Dim>& oracle, const Eigen::Matrix<float, Dim, 1>& q,
-                         float r, const std::string& what) {
-  std::vector<std::size_t> bi;
-  std::vector<float> bd;
-  oracle.radius(q, r, bi, bd, true);
-  for (const KdTree<Dim>* tree_ptr : trees) {
-    const KdTree<Dim>& tree = *tree_ptr;
-    std::vector<std::size_t> ti;
-    std::vector<float> td;
-    tree.radius(q, r, ti, td, true);
-    EXPECT_EQ(td, bd) << what << " r=" << r;
-    EXPECT_EQ(std::multiset<std::size_t>(ti.begin(), ti.end()),
-              std::multiset<std::size_t>(bi.begin(), bi.end()))
-        << what << " r=" << r;
-    // Unsorted: same set.
-    std::vector<std::size_t> ui;
-    std::vector<float> ud;
-    tree.radius(q, r, ui, ud, false);
-    EXPECT_EQ(std::multiset<std::size_t>(ui.begin(), ui.end()),
-              std::multiset<std::size_t>(bi.begin(), bi.end()))
-        << what << " unsorted r=" << r;
-  }
-}
-
-template <int Dim>
-void expect_radius_equal(const KdTree<Dim>& tree, const BruteForceSearch<Dim>& oracle,
-                         const Eigen::Matrix<float, Dim, 1>& q, float r, const std::string& what) {
-  expect_radius_equal<Dim>({&tree}, oracle, q, r, what);
-}
-
-template <int Dim>
-void expect_nearest_equal(const std::vector<const KdTree<Dim>*>& trees,
-                          const BruteForceSearch<Dim>& oracle,
-                          const Eigen::Matrix<float, Dim, 1>& q, float max_dist_sq,
-                          const std::string& what) {
-  const auto b = oracle.nearest(q, max_dist_sq);
-  for (const KdTree<Dim>* tree : trees) {
-    const auto t = tree->nearest(q, max_dist_sq);
-    ASSERT_EQ(t.has_value(), b.has_value()) << what << " max_dist_sq=" << max_dist_sq;
-    if (t) {
-      EXPECT_EQ(t->dist_sq, b->dist_sq) << what;
-      EXPECT_LE(t->dist_sq, max_dist_sq) << what;
-    }
-  }
-}
-
-template <int Dim>
-void expect_nearest_equal(const KdTree<Dim>& tree, const BruteForceSearch<Dim>& oracle,
-                          const Eigen::Matrix<float, Dim, 1>& q, float max_dist_sq,
-                          const std::string& what) {
-  expect_nearest_equal<Dim>({&tree}, oracle, q, max_dist_sq, what);
-}
+using namespace plumb::kdtree_test;
 
 template <int Dim>
 void check_random_clouds() {
@@ -418,108 +261,6 @@ TEST(KdTreeTest, ARebuiltTreeAnswersAsANewOne) {
   for (std::size_t j = 0; j < kept.size(); ++j) EXPECT_EQ(after[j].index, kept[j].index);
 }
 
-// Every query of a refitted tree against the oracle over the moved points.
-template <int Dim>
-void expect_refit_tree_exact(const KdTree<Dim>& tree, const Points<Dim>& pts, plumb::Rng& rng,
-                             const std::string& what) {
-  const BruteForceSearch<Dim> oracle(pts);
-  const std::vector<const KdTree<Dim>*> trees{&tree};
-  for (int i = 0; i < 120; ++i) {
-    // Half the queries at the points themselves, nudged; half anywhere around the cloud.
-    Eigen::Matrix<float, Dim, 1> q = random_query<Dim>(rng, 14.0);
-    if (i % 2 == 0 && pts[static_cast<std::size_t>(i)].allFinite()) {
-      q = pts[static_cast<std::size_t>(i)] + 0.01f * random_query<Dim>(rng, 1.0);
-    }
-    const std::string at = what + " query " + std::to_string(i);
-    for (const std::size_t k : {std::size_t{1}, std::size_t{7}}) expect_knn_equal<Dim>(trees, oracle, pts, q, k, at);
-    expect_bounded_knn_equal<Dim>(trees, oracle, pts, q, 5, 0.3f, at);
-    expect_radius_equal<Dim>(trees, oracle, q, 0.4f, at);
-    const std::optional<Neighbor> a = tree.nearest(q), b = oracle.nearest(q);
-    ASSERT_EQ(a.has_value(), b.has_value()) << at;
-    if (a) {
-      EXPECT_EQ(a->dist_sq, b->dist_sq) << at;
-    }
-  }
-}
-
-template <int Dim>
-void check_refit(std::uint64_t seed) {
-  plumb::Rng rng(seed);
-  Points<Dim> pts = make_cloud<Dim>(3000, Shape::kClusters, seed);
-  pts[7] = Eigen::Matrix<float, Dim, 1>::Constant(kNaN);
-  // 40 copies of one point: a bucket that is scanned as one point until they move apart.
-  for (std::size_t i = 100; i < 140; ++i) pts[i] = pts[99];
-  KdTree<Dim> tree(pts, KdTreeSettings{4, plumb::KdTreeSplit::kMean});
-  const std::size_t nodes = tree.num_nodes();
-
-  // Small rigid moves of eight groups of points (centimetres and a fraction of a degree, as a
-  // building's elements move from their design), then every point sent anywhere: the cells no
-  // longer fit the points at all, and the answers must still be exact.
-  std::vector<Eigen::Matrix<float, Dim, Dim>> turn(8);
-  std::vector<Eigen::Matrix<float, Dim, 1>> shift(8);
-  for (std::size_t g = 0; g < 8; ++g) {
-    const double a = rng.normal(0.0, 0.004);
-    Eigen::Matrix<float, Dim, Dim> R = Eigen::Matrix<float, Dim, Dim>::Identity();
-    R(0, 0) = R(1, 1) = static_cast<float>(std::cos(a));
-    R(0, 1) = static_cast<float>(-std::sin(a));
-    R(1, 0) = static_cast<float>(std::sin(a));
-    turn[g] = R;
-    for (int k = 0; k < Dim; ++k) shift[g][k] = static_cast<float>(rng.normal(0.0, 0.02));
-  }
-  Points<Dim> moved = pts;
-  for (std::size_t i = 0; i < moved.size(); ++i) {
-    if (i >= 99 && i < 120) continue;  // half of the copies stay together, half move
-    if (moved[i].allFinite()) moved[i] = turn[i % 8] * moved[i] + shift[i % 8];
-  }
-  tree.refit(moved);
-  EXPECT_EQ(tree.num_nodes(), nodes);
-  EXPECT_EQ(tree.size(), pts.size() - 1);
-  expect_refit_tree_exact<Dim>(tree, moved, rng, "small moves");
-
-  Points<Dim> scattered = pts;
-  for (auto& p : scattered) {
-    if (p.allFinite()) p = random_query<Dim>(rng, 12.0);
-  }
-  tree.refit(scattered);
-  expect_refit_tree_exact<Dim>(tree, scattered, rng, "scattered");
-  tree.refit(pts);  // and back where the tree was built
-  expect_refit_tree_exact<Dim>(tree, pts, rng, "back");
-}
-
-TEST(KdTreeTest, ARefittedTreeAnswersExactlyOverTheMovedPoints) {
-  check_refit<3>(51);
-  check_refit<2>(52);
-}
-
-TEST(KdTreeTest, ARefitThatDoesNotFitIsRefusedAndChangesNothing) {
-  Points<3> pts = make_cloud<3>(400, Shape::kUniform, 53);
-  pts[3] = Eigen::Vector3f(kNaN, 0, 0);
-  plumb::KdTree3f tree(pts);
-  const Eigen::Vector3f q(1, -2, 0.5f);
-  const std::vector<Neighbor> before = tree.knn(q, 4);
-  Points<3> shorter(pts.begin(), pts.end() - 1);
-  Points<3> more_nan = pts;
-  more_nan[10] = Eigen::Vector3f(0, kInf, 0);
-  Points<3> swapped = pts;  // as many finite points, but the missing one elsewhere
-  swapped[3] = Eigen::Vector3f(50, 50, 50);
-  swapped[200] = Eigen::Vector3f(kNaN, kNaN, kNaN);
-  for (const Points<3>* bad : {&shorter, &more_nan, &swapped}) {
-    try {
-      tree.refit(*bad);
-      ADD_FAILURE() << "expected plumb::Error";
-    } catch (const plumb::Error& e) {
-      EXPECT_NE(std::string(e.what()).find("KdTree::refit"), std::string::npos) << e.what();
-    }
-    const std::vector<Neighbor> after = tree.knn(q, 4);
-    ASSERT_EQ(after.size(), before.size());
-    for (std::size_t j = 0; j < before.size(); ++j) {
-      EXPECT_EQ(after[j].index, before[j].index);
-      EXPECT_EQ(after[j].dist_sq, before[j].dist_sq);
-    }
-  }
-  // The copy of a point that stands where the swapped one went is never found.
-  EXPECT_GT(tree.nearest(Eigen::Vector3f(50, 50, 50))->dist_sq, 100.0f);
-}
 
 TEST(KdTreeTest, NonFinitePointsAreSkipped) {
   Points<3> pts = make_cloud<3>(3000, Shape::kClusters, 41);
