@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // KdTree build, kNN-10 and NN-1 against nanoflann, PCL and Open3D on real clouds (single thread).
-// Names: kdtree_{build,knn10,nn1}/<impl>/<dataset>, and plumb's kdtree_refit and
-// kdtree_knn10_refitted (a tree whose points moved; no peer has one). Queries are a fixed strided
+// Names: kdtree_{build,knn10,nn1}/<impl>/<dataset>, and plumb's kdtree_refit (also on two threads)
+// and kdtree_knn10_refitted (a tree whose points moved; no peer has one). Queries are a fixed strided
 // subset of the cloud's own points (kNumQueries), the same for every implementation; trees are
 // built outside the timed loop for queries. Datasets missing from the data dir are skipped with a note on stderr.
 
@@ -110,17 +110,20 @@ std::vector<Eigen::Vector3f> moved_a_little(const Dataset* ds) {
 
 // A tree moved to the points moved a little, and back, each iteration one refit: the work a
 // rebuild does (kdtree_build) when a cloud deforms. No peer refits a tree; theirs rebuild.
-void plumb_refit(benchmark::State& state, const Dataset* ds) {
+void plumb_refit_on(benchmark::State& state, const Dataset* ds, int threads) {
   const std::vector<Eigen::Vector3f> moved = moved_a_little(ds);
   plumb::KdTree3f tree(ds->points, plumb_settings());
   bool there = false;
   for (auto _ : state) {
     there = !there;
-    tree.refit(there ? moved : ds->points);
+    tree.refit(there ? moved : ds->points, threads);
     benchmark::DoNotOptimize(tree.size());
   }
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * ds->points.size()));
 }
+void plumb_refit(benchmark::State& state, const Dataset* ds) { plumb_refit_on(state, ds, 1); }
+// The same on two threads (kdtree_refit/plumb_2threads): the one multi-threaded row of this file.
+void plumb_refit_2threads(benchmark::State& state, const Dataset* ds) { plumb_refit_on(state, ds, 2); }
 
 // kNN-10 in a tree refitted to the moved points, at the moved queries: against kdtree_knn10, what
 // the kept cells cost the queries.
@@ -312,6 +315,7 @@ int main(int argc, char** argv) {
     for (const Impl& impl : impls) add("kdtree_knn10", impl.name, ds, impl.knn10);
     for (const Impl& impl : impls) add("kdtree_nn1", impl.name, ds, impl.nn1);
     add("kdtree_refit", "plumb", ds, plumb_refit);
+    add("kdtree_refit", "plumb_2threads", ds, plumb_refit_2threads);
     add("kdtree_knn10_refitted", "plumb", ds, plumb_knn10_refitted);
   }
   benchmark::RunSpecifiedBenchmarks();

@@ -8,6 +8,7 @@
 #include <Eigen/SparseCholesky>
 
 #include "plumb/core/error.hpp"
+#include "plumb/core/parallel.hpp"
 #include "plumb/search/kdtree.hpp"
 
 namespace plumb {
@@ -104,6 +105,9 @@ PointCloud displaced_points(const PointCloud& design, const std::vector<std::uin
 
 namespace {
 
+/// Points per chunk of displaced_points() (a tall model's band is millions of points).
+constexpr std::size_t kDisplaceGrain = 1 << 15;
+
 /// One element's displacement in displaced_points(): q -> q + t + w x (q - pivot).
 struct ElementMove {
   Vector3d t, w, pivot;
@@ -112,7 +116,8 @@ struct ElementMove {
 /// displaced_points() of the design points index(0), ..., index(count - 1).
 template <typename Index>
 void displace_into(const PointCloud& design, std::size_t count, Index index, const Eigen::VectorXd& mean,
-                   const std::vector<Vector3d>& pivots, PointCloud& out) {
+                   const std::vector<Vector3d>& pivots, PointCloud& out, int threads) {
+  PLUMB_CHECK(threads >= 0, "displaced_points: threads must be >= 0 (0 = every core), got " << threads);
   PLUMB_CHECK(design.has_labels() && design.has_normals(), "displaced_points: the cloud needs labels and normals");
   PLUMB_CHECK(&design != &out, "displaced_points: the output cannot be the design cloud itself");
   // Each element's displacement looked up once, not at each of its points (a tall model's band is
@@ -131,36 +136,41 @@ void displace_into(const PointCloud& design, std::size_t count, Index index, con
   out.points.resize(count);
   out.normals.resize(count);
   out.labels.resize(count);
-  for (std::size_t k = 0; k < count; ++k) {
-    const std::size_t i = index(k);
-    PLUMB_CHECK(i < design.size(), "displaced_points: index " << i << " out of range for " << design.size() << " points");
-    const std::int32_t label = design.labels[i];
-    out.labels[k] = label;
-    if (label < 0 || static_cast<std::size_t>(label) >= elements || moved[static_cast<std::size_t>(label)] == 0) {
-      out.points[k] = design.points[i];
-      out.normals[k] = design.normals[i];
-      continue;
+  // Each point is written from its own design point alone: any split of the points gives the same.
+  parallel_for(threads, count, kDisplaceGrain, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) {
+      const std::size_t i = index(k);
+      PLUMB_CHECK(i < design.size(),
+                  "displaced_points: index " << i << " out of range for " << design.size() << " points");
+      const std::int32_t label = design.labels[i];
+      out.labels[k] = label;
+      if (label < 0 || static_cast<std::size_t>(label) >= elements || moved[static_cast<std::size_t>(label)] == 0) {
+        out.points[k] = design.points[i];
+        out.normals[k] = design.normals[i];
+        continue;
+      }
+      const ElementMove& m = moves[static_cast<std::size_t>(label)];
+      const Vector3d q = design.points[i].cast<double>();
+      out.points[k] = (q + m.t + m.w.cross(q - m.pivot)).cast<float>();
+      const Vector3d n = design.normals[i].cast<double>();
+      out.normals[k] = (n + m.w.cross(n)).normalized().cast<float>();
     }
-    const ElementMove& m = moves[static_cast<std::size_t>(label)];
-    const Vector3d q = design.points[i].cast<double>();
-    out.points[k] = (q + m.t + m.w.cross(q - m.pivot)).cast<float>();
-    const Vector3d n = design.normals[i].cast<double>();
-    out.normals[k] = (n + m.w.cross(n)).normalized().cast<float>();
-  }
+  });
 }
 
 }  // namespace
 
 void displaced_points(const PointCloud& design, const std::vector<std::uint32_t>& indices,
-                      const Eigen::VectorXd& mean, const std::vector<Vector3d>& pivots, PointCloud& out) {
+                      const Eigen::VectorXd& mean, const std::vector<Vector3d>& pivots, PointCloud& out,
+                      int threads) {
   displace_into(
       design, indices.size(), [&indices](std::size_t k) { return static_cast<std::size_t>(indices[k]); }, mean,
-      pivots, out);
+      pivots, out, threads);
 }
 
 void displaced_points(const PointCloud& design, const Eigen::VectorXd& mean, const std::vector<Vector3d>& pivots,
-                      PointCloud& out) {
-  displace_into(design, design.size(), [](std::size_t k) { return k; }, mean, pivots, out);
+                      PointCloud& out, int threads) {
+  displace_into(design, design.size(), [](std::size_t k) { return k; }, mean, pivots, out, threads);
 }
 
 double ElementEstimate::displacement_sigma(const Vector3d& q, const Vector3d& direction) const {

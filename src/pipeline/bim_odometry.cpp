@@ -440,15 +440,16 @@ const BimOdometry::Target& BimOdometry::registration_target(const PointCloud& ke
     target->displaced = PointCloud{};
     target->cloud = bim_.get();
   } else {
+    // A tall model's band is millions of points: moved, and its tree refitted, on every thread.
     if (target->whole) {
-      displaced_points(*bim_, target_mean_, element_pivots(), target->displaced);
+      displaced_points(*bim_, target_mean_, element_pivots(), target->displaced, settings_.threads);
     } else {
-      displaced_points(*bim_, target->index, target_mean_, element_pivots(), target->displaced);
+      displaced_points(*bim_, target->index, target_mean_, element_pivots(), target->displaced, settings_.threads);
     }
     target->cloud = &target->displaced;
   }
   if (refit) {
-    target->tree->refit(target->cloud->points);
+    target->tree->refit(target->cloud->points, settings_.threads);
   } else if (target->tree != nullptr) {
     target->tree->rebuild(target->cloud->points);
   } else {

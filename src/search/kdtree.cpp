@@ -9,6 +9,8 @@
 #include <cstring>
 #include <limits>
 
+#include "plumb/core/parallel.hpp"
+
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -110,6 +112,10 @@ std::uint32_t kd_partition_records(float* records, int dim, float split, std::ui
     front += is_left;
   }
   return front;
+}
+
+void kd_parallel_chunks(int threads, std::size_t chunks, void (*body)(void*, std::size_t), void* context) {
+  parallel_chunks(threads, chunks, [body, context](std::size_t c) { body(context, c); });
 }
 
 }  // namespace detail

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <memory>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "plumb/core/error.hpp"
@@ -230,6 +231,59 @@ TEST(AsBuiltMapTest, AWallThePoseErrorCanAbsorbGainsNoConfidence) {
   EXPECT_GT(south.face_observations, 100u);
   EXPECT_GT(south.face_offset_sigma(), 0.9 * map.settings().sigma_translation);
   EXPECT_LT(std::abs(south.face_offset()), 0.01);  // not the 2 cm the pose absorbed
+}
+
+TEST(AsBuiltMapTest, DisplacedPointsAreTheSameOnAnyNumberOfThreads) {
+  // The room cloud repeated until it spans several of displaced_points()' chunks, every element moved.
+  const Scene s;
+  PointCloud design;
+  while (design.size() < 200000) {
+    design.points.insert(design.points.end(), s.design.points.begin(), s.design.points.end());
+    design.normals.insert(design.normals.end(), s.design.normals.begin(), s.design.normals.end());
+    design.labels.insert(design.labels.end(), s.design.labels.begin(), s.design.labels.end());
+  }
+  std::mt19937 gen(7);
+  std::normal_distribution<double> shift(0.0, 0.01), turn(0.0, 0.0035);
+  Eigen::VectorXd mean(6 * kNumElements);
+  for (Eigen::Index i = 0; i < mean.size(); ++i) mean[i] = (i % 6) < 3 ? shift(gen) : turn(gen);
+  const std::vector<Vector3d> pivots = element_centroids(design);
+  std::vector<std::uint32_t> band;
+  for (std::size_t i = 0; i < design.size(); i += 1 + i % 3) band.push_back(static_cast<std::uint32_t>(i));
+  PointCloud one, whole_one;
+  displaced_points(design, band, mean, pivots, one, 1);
+  displaced_points(design, mean, pivots, whole_one, 1);
+  ASSERT_EQ(one.size(), band.size());
+  // The first thread's answer is the displacement itself.
+  for (std::size_t k = 0; k < band.size(); k += 997) {
+    const std::size_t i = band[k];
+    const Eigen::Index e = 6 * design.labels[i];
+    const Vector3d q = design.points[i].cast<double>();
+    const Vector3d moved = q + mean.segment<3>(e) + mean.segment<3>(e + 3).cross(q - pivots[static_cast<std::size_t>(design.labels[i])]);
+    EXPECT_LT((one.points[k].cast<double>() - moved).norm(), 1e-5) << "point " << i;
+    EXPECT_EQ(one.points[k], whole_one.points[i]);
+  }
+  for (const int threads : {2, 3, 0}) {
+    PointCloud other, whole_other;
+    displaced_points(design, band, mean, pivots, other, threads);
+    displaced_points(design, mean, pivots, whole_other, threads);
+    EXPECT_EQ(other.points, one.points) << threads << " threads";
+    EXPECT_EQ(other.normals, one.normals) << threads << " threads";
+    EXPECT_EQ(other.labels, one.labels) << threads << " threads";
+    EXPECT_EQ(whole_other.points, whole_one.points) << threads << " threads";
+  }
+  // A bad index is named the same way whichever thread meets it.
+  band[band.size() - 10] = static_cast<std::uint32_t>(design.size() + 5);
+  for (const int threads : {1, 2}) {
+    PointCloud out;
+    try {
+      displaced_points(design, band, mean, pivots, out, threads);
+      ADD_FAILURE() << "expected plumb::Error";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("index " + std::to_string(design.size() + 5)), std::string::npos) << e.what();
+    }
+  }
+  PointCloud out;
+  EXPECT_THROW(displaced_points(design, mean, pivots, out, -1), Error);
 }
 
 TEST(AsBuiltMapTest, CorrectedCloudMovesEachPointByItsElementsEstimate) {

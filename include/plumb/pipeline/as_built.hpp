@@ -65,12 +65,14 @@ std::vector<Vector3d> element_centroids(const PointCloud& cloud, std::vector<std
 /// @throws plumb::Error when the cloud has no labels or normals, or an index is out of range
 PointCloud displaced_points(const PointCloud& design, const std::vector<std::uint32_t>& indices,
                             const Eigen::VectorXd& mean, const std::vector<Vector3d>& pivots);
-/// @brief The same into `out` (its points, normals and labels replaced; their memory reused).
+/// @brief The same into `out` (its points, normals and labels replaced; their memory reused), on
+///        up to `threads` threads (0 = every core; the result is the same for any count).
 void displaced_points(const PointCloud& design, const std::vector<std::uint32_t>& indices,
-                      const Eigen::VectorXd& mean, const std::vector<Vector3d>& pivots, PointCloud& out);
+                      const Eigen::VectorXd& mean, const std::vector<Vector3d>& pivots, PointCloud& out,
+                      int threads = 1);
 /// @brief displaced_points() of every point of `design`, into `out`.
 void displaced_points(const PointCloud& design, const Eigen::VectorXd& mean, const std::vector<Vector3d>& pivots,
-                      PointCloud& out);
+                      PointCloud& out, int threads = 1);
 
 /// @brief Settings of AsBuiltMap.
 struct AsBuiltSettings {

@@ -115,8 +115,10 @@ class KdTree {
   /// less than a leaf cell; they slow down, never err, as they move farther.
   /// @param points the same number of points as the tree was built (or last rebuilt) from, finite
   ///        exactly where those were; index i is the point that was index i.
-  /// @throws plumb::Error when the size or the finite points differ; the tree is then left as it was.
-  void refit(const std::vector<Point>& points);
+  /// @param threads threads to work on (0 = every core); the tree is the same for any count.
+  /// @throws plumb::Error when the size or the finite points differ, or threads < 0; the tree is
+  ///         then left as it was.
+  void refit(const std::vector<Point>& points, int threads = 1);
 
   /// @brief Build the tree over `cloud.points` (Dim = 3 only); indices refer to the cloud.
   template <int D = Dim, typename = std::enable_if_t<D == 3>>
@@ -216,7 +218,16 @@ class KdTree {
   struct RadiusSet;
   static constexpr int kMaxStack = 64;  ///< pending cells of the iterative search
 
+  /// refit() cuts the tree into the subtrees at this depth (up to 2^depth) to share them out.
+  static constexpr int kRefitSplitDepth = 6;
+
   void build();
+  /// refit() of nodes [first, end), one whole subtree; returns its bounds.
+  template <typename Box>
+  Box refit_subtree(const std::vector<Point>& points, std::uint32_t first, std::uint32_t end);
+  /// An inner node's cuts from its children's bounds; returns the node's bounds.
+  template <typename Box>
+  static Box join_children(Node& node, const Box& left, const Box& right);
   float root_box_dist(const float* q, float* box_d) const;
   template <typename Set>
   void scan_leaf(const Node& node, const float* q, Set& set) const;
@@ -243,6 +254,7 @@ using KdTree3f = KdTree<3>;
 }  // namespace plumb
 
 #include "plumb/search/impl/kdtree_impl.hpp"
+#include "plumb/search/impl/kdtree_refit_impl.hpp"
 
 #ifndef PLUMB_HEADER_ONLY
 namespace plumb {

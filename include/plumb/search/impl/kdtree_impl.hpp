@@ -128,6 +128,10 @@ void kd_record_box(const float* records, std::uint32_t begin, std::uint32_t end,
 /// ones first. Returns the first right slot.
 std::uint32_t kd_partition_records(float* records, int dim, float split, std::uint32_t begin, std::uint32_t end);
 
+/// body(context, c) for every c in [0, chunks), on up to `threads` threads (core/parallel.hpp's
+/// parallel_chunks, behind a plain function pointer so that this header needs no <functional>).
+void kd_parallel_chunks(int threads, std::size_t chunks, void (*body)(void*, std::size_t), void* context);
+
 /// Bounds of a node's points under construction.
 template <int Dim>
 struct KdBuildBox {
@@ -298,91 +302,6 @@ void KdTree<Dim>::build() {
     stack.push_back(Task{mid, t.end, id, t.depth + 1, true, right});
     // popped next: becomes node id + 1
     stack.push_back(Task{t.begin, mid, id, t.depth + 1, false, left});
-  }
-}
-
-template <int Dim>
-void KdTree<Dim>::refit(const std::vector<Point>& points) {
-  PLUMB_CHECK(points.size() == num_input_points_, "KdTree::refit: " << points.size()
-                                                      << " points given, the tree was built from "
-                                                      << num_input_points_);
-  std::size_t finite = 0;
-  for (const Point& p : points) finite += p.allFinite() ? 1 : 0;
-  PLUMB_CHECK(finite == size_, "KdTree::refit: " << finite << " finite points given, the tree holds " << size_);
-  constexpr std::size_t R = detail::kKdRecord;
-  // Nothing is written before every stored index is known to be finite (the tree stays as it was
-  // on a throw). With as many finite points as stored ones, that holds at once when the tree
-  // skipped none; otherwise each stored index is looked at.
-  if (num_skipped() > 0) {
-    for (const Node& node : nodes_) {
-      if (node.dim >= 0) continue;
-      const std::uint32_t m = node.b - node.a;
-      const float* ids = coords_.data() + R * node.a + (R - 1) * m;
-      for (std::uint32_t j = 0; j < m; ++j) {
-        const std::uint32_t i = leaf_id(ids, j);
-        PLUMB_CHECK(points[i].allFinite(),
-                    "KdTree::refit: point " << i << " is not finite, it was when the tree was built");
-      }
-    }
-  }
-  // The leaves' blocks, in storage order (a gather from `points`: the loads of one leaf are
-  // independent, so they overlap).
-  for (const Node& node : nodes_) {
-    if (node.dim >= 0) continue;
-    const std::uint32_t m = node.b - node.a;
-    float* x = coords_.data() + R * node.a;
-    const float* ids = x + (R - 1) * m;
-    for (std::uint32_t j = 0; j < m; ++j) {
-      const Point& p = points[leaf_id(ids, j)];
-      for (int k = 0; k < Dim; ++k) x[static_cast<std::size_t>(k) * m + j] = p[k];
-    }
-  }
-  // Bottom-up. The nodes are in depth-first order (a node, its left subtree, its right subtree),
-  // so the reverse sweep meets a node's right subtree, then its left one, then the node: with each
-  // subtree leaving its box on a stack, a node finds its left child's box on top and its right
-  // child's below. The stack holds at most one box per level.
-  struct Box {
-    float lo[Dim], hi[Dim];
-  };
-  std::vector<Box> stack;
-  stack.reserve(max_depth_ + 2);
-  for (std::size_t id = nodes_.size(); id-- > 0;) {
-    Node& node = nodes_[id];
-    Box box;
-    if (node.dim < 0) {
-      const std::uint32_t m = node.b - node.a;
-      const float* x = coords_.data() + R * node.a;
-      bool coincide = true;
-      for (int k = 0; k < Dim; ++k) {
-        const float* row = x + static_cast<std::size_t>(k) * m;
-        float l = row[0], h = row[0];
-        for (std::uint32_t j = 1; j < m; ++j) {
-          l = std::min(l, row[j]);
-          h = std::max(h, row[j]);
-        }
-        box.lo[k] = l;
-        box.hi[k] = h;
-        coincide = coincide && l == h;
-      }
-      // A bucket is scanned as one point only while its points coincide.
-      if (node.dim == kCoincidentLeaf && !coincide) node.dim = kLeaf;
-    } else {
-      const Box left = stack.back();
-      stack.pop_back();
-      const Box right = stack.back();
-      stack.pop_back();
-      node.lo = left.hi[node.dim];  // the left child's largest coordinate along dim
-      node.hi = right.lo[node.dim]; // the right child's smallest
-      for (int k = 0; k < Dim; ++k) {
-        box.lo[k] = std::min(left.lo[k], right.lo[k]);
-        box.hi[k] = std::max(left.hi[k], right.hi[k]);
-      }
-    }
-    stack.push_back(box);
-  }
-  for (int k = 0; k < Dim; ++k) {
-    box_lo_[k] = stack.back().lo[k];
-    box_hi_[k] = stack.back().hi[k];
   }
 }
 
