@@ -87,6 +87,7 @@ void run_demo(const DemoCommandOptions& o) {
   const io::FrameDumpReader dump(dump_dir);
   RunSettings rs;
   rs.odometry.threads = threads;
+  rs.odometry.refresh_threads = threads;
   rs.localizer.threads = threads;
   // The first frame is found in the model without any hint (BimLocalizer), unless the operator
   // gives the surveyed start pose.

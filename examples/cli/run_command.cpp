@@ -61,6 +61,7 @@ void run(const RunOptions& o) {
   settings.odometry.correct_every = o.correct_every;
   settings.odometry.threads = resolve_thread_count(o.threads);
   settings.localizer.threads = settings.odometry.threads;
+  settings.odometry.refresh_threads = settings.odometry.threads;
   settings.odometry.estimate_as_built = o.as_built;
   settings.refine_as_built = o.refine;
   settings.deviation_tolerance = o.tolerance;

@@ -96,6 +96,7 @@ void bind_bim_odometry_types(py::module_& m) {
       .def_readwrite("key_point_voxel", &BimOdometrySettings::key_point_voxel)
       .def_readwrite("icp", &BimOdometrySettings::icp)
       .def_readwrite("threads", &BimOdometrySettings::threads)
+      .def_readwrite("refresh_threads", &BimOdometrySettings::refresh_threads)
       .def_readwrite("min_anchor_overlap", &BimOdometrySettings::min_anchor_overlap)
       .def_readwrite("min_anchor_inliers", &BimOdometrySettings::min_anchor_inliers)
       .def_readwrite("anchor_sigma", &BimOdometrySettings::anchor_sigma)

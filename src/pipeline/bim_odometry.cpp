@@ -130,6 +130,8 @@ BimOdometry::BimOdometry(std::shared_ptr<const PointCloud> bim_cloud, const Eige
   PLUMB_CHECK(settings.wheel_tolerance_xy >= 0.0 && settings.wheel_tolerance_theta >= 0.0 &&
                   settings.wheel_tolerance_ratio >= 0.0,
               "BimOdometry: wheel_tolerance_xy, wheel_tolerance_theta and wheel_tolerance_ratio must be >= 0");
+  PLUMB_CHECK(settings.refresh_threads >= 0,
+              "BimOdometry: refresh_threads must be >= 0 (0 = every core), got " << settings.refresh_threads);
   PLUMB_CHECK(settings.use_bim || !settings.estimate_as_built,
               "BimOdometry: estimate_as_built needs use_bim (the as-built is estimated from the BIM registrations)");
   if (settings.use_bim) {
@@ -440,16 +442,17 @@ const BimOdometry::Target& BimOdometry::registration_target(const PointCloud& ke
     target->displaced = PointCloud{};
     target->cloud = bim_.get();
   } else {
-    // A tall model's band is millions of points: moved, and its tree refitted, on every thread.
+    // A tall model's band is millions of points: moved, and its tree refitted, on refresh_threads.
     if (target->whole) {
-      displaced_points(*bim_, target_mean_, element_pivots(), target->displaced, settings_.threads);
+      displaced_points(*bim_, target_mean_, element_pivots(), target->displaced, settings_.refresh_threads);
     } else {
-      displaced_points(*bim_, target->index, target_mean_, element_pivots(), target->displaced, settings_.threads);
+      displaced_points(*bim_, target->index, target_mean_, element_pivots(), target->displaced,
+                       settings_.refresh_threads);
     }
     target->cloud = &target->displaced;
   }
   if (refit) {
-    target->tree->refit(target->cloud->points, settings_.threads);
+    target->tree->refit(target->cloud->points, settings_.refresh_threads);
   } else if (target->tree != nullptr) {
     target->tree->rebuild(target->cloud->points);
   } else {

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // run_bim_odometry with the as-built estimate in a four-storey building: the registration target
 // remade from the estimate is the storey band the robot drives in, and every frame's result (the
-// estimate's included) is bit for bit the one against the whole model.
+// estimate's included) is bit for bit the one against the whole model, and the one with the band
+// moved and refitted on several threads.
 #include <filesystem>
 #include <limits>
 #include <string>
@@ -40,17 +41,26 @@ TEST(RunStoreyBandTest, ADisplacedTargetIsTheStoreyBandAndChangesNoResult) {
   plumb::simulate_to_dump(mesh, dir, s);
   const plumb::io::FrameDumpReader dump(dir);
 
-  auto run = [&](double band_margin) {
+  auto run = [&](double band_margin, int refresh_threads) {
     plumb::RunSettings settings;
     settings.initial_pose = dump.ground_truth().poses.front();
     settings.odometry.estimate_as_built = true;
     settings.odometry.as_built_refresh_every = 3;
     settings.odometry.target_band_margin = band_margin;
+    settings.odometry.refresh_threads = refresh_threads;
     return plumb::run_bim_odometry(dump, mesh, settings);
   };
-  const plumb::RunReport band = run(0.5);
-  const plumb::RunReport whole = run(std::numeric_limits<double>::infinity());
+  const plumb::RunReport band = run(0.5, 1);
+  const plumb::RunReport whole = run(std::numeric_limits<double>::infinity(), 1);
+  // The band moved and refitted on three threads: every frame as on one.
+  const plumb::RunReport threaded = run(0.5, 3);
   std::filesystem::remove_all(dir);
+  ASSERT_EQ(threaded.frames.size(), band.frames.size());
+  for (std::size_t i = 0; i < band.frames.size(); ++i) {
+    ASSERT_TRUE(threaded.frames[i].T_world_base.matrix() == band.frames[i].T_world_base.matrix()) << "frame " << i;
+    ASSERT_EQ(threaded.frames[i].icp_inliers, band.frames[i].icp_inliers) << "frame " << i;
+    ASSERT_EQ(threaded.frames[i].target_points, band.frames[i].target_points) << "frame " << i;
+  }
 
   ASSERT_EQ(band.frames.size(), whole.frames.size());
   ASSERT_GT(band.anchors_accepted, 20u);

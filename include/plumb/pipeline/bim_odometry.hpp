@@ -133,6 +133,11 @@ struct BimOdometrySettings {
   /// `icp.threads`), and with more than one, a frame's key points are found on a second thread while
   /// the front end matches its scan. Results are bit-identical for any count (core/parallel.hpp).
   int threads = 1;
+  /// Threads (0 = every core) that move the displaced target's points and refit its kd-tree when
+  /// the estimate is taken up: millions of points on a large model, while everything else waits
+  /// for the frame. `plumb run` gives them every thread of the run (its other stages are then
+  /// waiting too). Bit-identical for any count.
+  int refresh_threads = 1;
 };
 
 /// @brief Covariance (x, y, θ; frame of the previous base pose) BimOdometry gives one front-end step.
