@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <memory>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <Eigen/Cholesky>
@@ -270,6 +271,16 @@ TEST(BimOdometryTest, BadInputThrows) {
     EXPECT_THROW(plumb::BimOdometry(labelled, Eigen::Isometry3d::Identity(), s), plumb::Error);
     s.anchor_from_elements = false;
     EXPECT_NO_THROW(plumb::BimOdometry(labelled, Eigen::Isometry3d::Identity(), s));
+  }
+  // A negative thread count for the target's refresh is refused when the odometry is made, not at
+  // its first refresh.
+  plumb::BimOdometrySettings negative_threads;
+  negative_threads.refresh_threads = -1;
+  try {
+    plumb::BimOdometry(labelled, Eigen::Isometry3d::Identity(), negative_threads);
+    ADD_FAILURE() << "expected plumb::Error";
+  } catch (const plumb::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("refresh_threads"), std::string::npos) << e.what();
   }
   plumb::BimOdometrySettings plain;
   plain.use_bim = false;
