@@ -225,6 +225,9 @@ nlohmann::json run_report_json(const RunReport& r) {
                                  {"segment", r.mean_seconds_segment},
                                  {"icp", r.mean_seconds_icp},
                                  {"process", r.mean_seconds_process}};
+  j["seconds_per_frame"] = {{"median", r.median_seconds_process},
+                            {"max", r.max_seconds_process},
+                            {"slowest_frame", r.slowest_frame}};
   j["peak_rss_mib"] = peak_rss_mib();
   if (r.has_ground_truth) {
     j["initial_error"] = {{"xy", r.initial_error_xy}, {"yaw_deg", r.initial_error_yaw_deg}};
@@ -398,6 +401,8 @@ void print_run_summary(const RunReport& r) {
     std::printf("per frame: %.1f ms in BimOdometry (front end %.1f, key points %.1f, BIM ICP %.1f) = %.1f frames/s without reading\n",
                 r.mean_seconds_process * 1e3, r.mean_seconds_front_end * 1e3, r.mean_seconds_segment * 1e3,
                 r.mean_seconds_icp * 1e3, 1.0 / r.mean_seconds_process);
+    std::printf("slowest frame: %.1f ms (frame %zu; median %.1f ms)\n", r.max_seconds_process * 1e3, r.slowest_frame,
+                r.median_seconds_process * 1e3);
   }
   if (r.localized) {
     std::printf("initial localization: %s in %.2f s (score %.2f, second %.2f, overlap %.2f, rmse %.1f mm)\n",

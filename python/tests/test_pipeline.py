@@ -61,6 +61,11 @@ def test_run_bim_odometry_equals_plumb_run(sim_run, demo_model, tmp_path):
     err = np.linalg.norm(report.bim.poses[:, :2, 3] - truth, axis=1)
     assert report.ape_rmse_bim == pytest.approx(np.sqrt(np.mean(err**2)), rel=1e-9)
     assert report.max_error_bim == pytest.approx(err.max(), rel=1e-12)
+    # The slowest frame and the median, recomputed from the frames' own times.
+    seconds = np.array([f.seconds_total for f in report.frames])
+    assert report.slowest_frame == int(np.argmax(seconds))
+    assert report.max_seconds_process == seconds.max()
+    assert report.median_seconds_process == np.sort(seconds)[len(seconds) // 2]
 
 
 def test_run_bim_odometry_settings_and_threads(sim_run, demo_model):

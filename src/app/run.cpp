@@ -242,6 +242,16 @@ void track_frames(const io::FrameDumpReader& dump, const bim::BimMesh& mesh, con
     report.mean_seconds_icp += f.seconds_icp / static_cast<double>(m);
     report.mean_seconds_process += f.seconds_total / static_cast<double>(m);
   }
+  if (m > 0) {
+    std::vector<double> seconds(m);
+    for (std::size_t i = 0; i < m; ++i) {
+      seconds[i] = report.frames[i].seconds_total;
+      if (seconds[i] > seconds[report.slowest_frame]) report.slowest_frame = i;
+    }
+    report.max_seconds_process = seconds[report.slowest_frame];
+    std::nth_element(seconds.begin(), seconds.begin() + static_cast<std::ptrdiff_t>(m / 2), seconds.end());
+    report.median_seconds_process = seconds[m / 2];
+  }
   if (!refine || report.partial) return;
   // The second pass: the same frames from the same start, registered to the building as estimated
   // at the end of the first, so that the first frames' poses know what the whole run learnt.

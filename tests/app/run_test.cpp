@@ -8,6 +8,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <unistd.h>
 
@@ -68,6 +69,15 @@ TEST_F(BimOdometryRunTest, TracksGroundTruthFromAKnownStart) {
   // The three trajectories start at the given pose.
   EXPECT_LT(xy_error(r.wheel.poses[0], gt.poses[0]), 1e-9);
   EXPECT_LT(xy_error(r.lidar.poses[0], gt.poses[0]), 1e-9);
+  // The slowest frame and the median of the frames' own process() times.
+  std::vector<double> seconds;
+  for (const plumb::BimFrameResult& f : r.frames) seconds.push_back(f.seconds_total);
+  const auto slowest = std::max_element(seconds.begin(), seconds.end());
+  EXPECT_EQ(r.slowest_frame, static_cast<std::size_t>(slowest - seconds.begin()));
+  EXPECT_EQ(r.max_seconds_process, *slowest);
+  std::sort(seconds.begin(), seconds.end());
+  EXPECT_EQ(r.median_seconds_process, seconds[seconds.size() / 2]);
+  EXPECT_GT(r.median_seconds_process, 0.0);
 }
 
 TEST_F(BimOdometryRunTest, ThreadsChangeNoFrameResult) {

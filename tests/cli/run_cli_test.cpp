@@ -74,6 +74,11 @@ TEST_F(CliTest, RunWritesTheThreeTrajectoriesAndTableTwo) {
   EXPECT_GT(t.at("segment").get<double>(), 0.0);
   EXPECT_LE(t.at("front_end").get<double>() + t.at("icp").get<double>(), t.at("process").get<double>() * 1.001);
   EXPECT_LE(t.at("segment").get<double>() + t.at("icp").get<double>(), t.at("process").get<double>() * 1.001);
+  const Json& per_frame = j.at("seconds_per_frame");
+  EXPECT_GT(per_frame.at("median").get<double>(), 0.0);
+  EXPECT_GE(per_frame.at("max").get<double>(), t.at("process").get<double>());
+  EXPECT_GE(per_frame.at("max").get<double>(), per_frame.at("median").get<double>());
+  EXPECT_LT(per_frame.at("slowest_frame").get<std::size_t>(), dump.num_frames());
   const Json& reg = j.at("registration_error_xy");
   EXPECT_GT(reg.at("count").get<std::size_t>(), dump.num_frames() / 2);
   EXPECT_GT(reg.at("rms").get<double>(), 0.0);

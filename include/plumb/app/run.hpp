@@ -104,6 +104,12 @@ struct RunReport {
   double frames_per_second = 0.0;       ///< frames / seconds_frames (reading and deskewing included)
   /// Mean per-frame time of BimOdometry::process() and its parts [s] (reading frames excluded).
   double mean_seconds_front_end = 0.0, mean_seconds_segment = 0.0, mean_seconds_icp = 0.0, mean_seconds_process = 0.0;
+  /// BimOdometry::process() per frame: the median (the upper one of an even count) and the
+  /// largest, and the frame that took it. A frame that takes up a new as-built estimate (every
+  /// as_built_refresh_every anchors) does that work within its own process(): on a large model
+  /// the largest is a refresh, the stall a robot waiting for that pose sees.
+  double median_seconds_process = 0.0, max_seconds_process = 0.0;
+  std::size_t slowest_frame = 0;
   // With ground truth (gt.tum):
   bool has_ground_truth = false;
   std::string ground_truth_note = "absent";  ///< "used", "absent" (no gt.tum) or "too_short" (fewer poses than frames)
