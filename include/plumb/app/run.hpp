@@ -107,7 +107,8 @@ struct RunReport {
   /// BimOdometry::process() per frame: the median (the upper one of an even count) and the
   /// largest, and the frame that took it. A frame that takes up a new as-built estimate (every
   /// as_built_refresh_every anchors) does that work within its own process(): on a large model
-  /// the largest is a refresh, the stall a robot waiting for that pose sees.
+  /// the largest is a refresh, the stall a robot waiting for that pose sees. All three are 0 when
+  /// no frame was processed (check `frames` first).
   double median_seconds_process = 0.0, max_seconds_process = 0.0;
   std::size_t slowest_frame = 0;
   // With ground truth (gt.tum):
